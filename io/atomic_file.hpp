@@ -1,0 +1,23 @@
+// Outputs are written whole or not at all: the content goes to a temporary file in the same
+// directory, which is renamed over the target only after it was written and flushed.
+#pragma once
+
+#include <functional>
+#include <ostream>
+#include <string>
+
+namespace jpcr {
+
+/// Calls write(stream) on a temporary file next to `path`, then renames it to `path`. If write
+/// throws or the stream fails, the temporary file is removed and `path` is left untouched.
+/// Throws InputError naming the file when it cannot be written.
+void write_file_atomically(const std::string& path,
+                           const std::function<void(std::ostream&)>& write);
+
+/// Creates `dir` and its parents when missing; throws InputError naming it on failure.
+void ensure_directory(const std::string& dir);
+
+/// Reads a whole file into memory; throws InputError naming it when it cannot be read.
+std::string read_file(const std::string& path);
+
+}  // namespace jpcr

@@ -1,0 +1,110 @@
+#include "jpcr/io/depth_png.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "jpcr/io/atomic_file.hpp"
+#include "jpcr/quadric/error.hpp"
+
+namespace jpcr {
+
+namespace {
+
+std::string describe(const cv::Mat& m) {
+  const int depth = m.depth();
+  const char* bits = depth == CV_8U    ? "8-bit"
+                     : depth == CV_16U ? "16-bit"
+                     : depth == CV_32F ? "float"
+                                       : "other";
+  return std::string(bits) + " with " + std::to_string(m.channels()) + " channel(s)";
+}
+
+cv::Mat decode(const std::string& path, int flags) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": file does not exist");
+  const std::string bytes = read_file(path);
+  const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
+  cv::Mat image;
+  try {
+    image = cv::imdecode(buffer, flags);
+  } catch (const cv::Exception& e) {
+    throw InputError(path + ": cannot be decoded as an image (" + e.msg + ")");
+  }
+  if (image.empty())
+    throw InputError(path + ": cannot be decoded as an image (corrupt or not a PNG)");
+  return image;
+}
+
+void write_encoded(const std::string& path, const cv::Mat& image) {
+  std::vector<unsigned char> encoded;
+  if (!cv::imencode(".png", image, encoded)) throw InputError(path + ": PNG encoding failed");
+  write_file_atomically(path, [&](std::ostream& out) {
+    out.write(reinterpret_cast<const char*>(encoded.data()),
+              static_cast<std::streamsize>(encoded.size()));
+  });
+}
+
+}  // namespace
+
+DepthImage load_depth_png(const std::string& path, double depth_scale, int expected_width,
+                          int expected_height) {
+  const cv::Mat raw = decode(path, cv::IMREAD_UNCHANGED);
+  if (raw.type() != CV_16UC1) {
+    throw InputError(path + ": expected a 16-bit single-channel depth PNG, got " + describe(raw));
+  }
+  if (expected_width > 0 && (raw.cols != expected_width || raw.rows != expected_height)) {
+    throw InputError(path + ": image is " + std::to_string(raw.cols) + "x" +
+                     std::to_string(raw.rows) + " but the camera is " +
+                     std::to_string(expected_width) + "x" + std::to_string(expected_height));
+  }
+  DepthImage depth(raw.cols, raw.rows, 0.0f);
+  const float inv_scale = static_cast<float>(1.0 / depth_scale);
+  for (int v = 0; v < raw.rows; ++v) {
+    const auto* row = raw.ptr<std::uint16_t>(v);
+    for (int u = 0; u < raw.cols; ++u)
+      depth(u, v) = static_cast<float>(row[u]) * inv_scale;
+  }
+  return depth;
+}
+
+void save_depth_png(const std::string& path, const DepthImage& depth, double depth_scale) {
+  cv::Mat raw(depth.height(), depth.width(), CV_16UC1);
+  for (int v = 0; v < depth.height(); ++v) {
+    auto* row = raw.ptr<std::uint16_t>(v);
+    for (int u = 0; u < depth.width(); ++u) {
+      const double value = static_cast<double>(depth(u, v)) * depth_scale;
+      row[u] = (std::isfinite(value) && value > 0.0 && value < 65535.5)
+                   ? static_cast<std::uint16_t>(std::lround(value))
+                   : 0;
+    }
+  }
+  write_encoded(path, raw);
+}
+
+ColorImage load_color_image(const std::string& path) {
+  const cv::Mat bgr = decode(path, cv::IMREAD_COLOR);
+  ColorImage image(bgr.cols, bgr.rows);
+  for (int v = 0; v < bgr.rows; ++v) {
+    const auto* row = bgr.ptr<cv::Vec3b>(v);
+    for (int u = 0; u < bgr.cols; ++u)
+      image(u, v) = Rgb8{row[u][2], row[u][1], row[u][0]};
+  }
+  return image;
+}
+
+void save_color_png(const std::string& path, const ColorImage& image) {
+  cv::Mat bgr(image.height(), image.width(), CV_8UC3);
+  for (int v = 0; v < image.height(); ++v) {
+    auto* row = bgr.ptr<cv::Vec3b>(v);
+    for (int u = 0; u < image.width(); ++u) {
+      const Rgb8 c = image(u, v);
+      row[u] = cv::Vec3b(c.b, c.g, c.r);
+    }
+  }
+  write_encoded(path, bgr);
+}
+
+}  // namespace jpcr

@@ -1,0 +1,15 @@
+// Shortest decimal text that reads back to the same double (std::to_chars), for trajectory
+// files and JSON: full precision without noise digits.
+#pragma once
+
+#include <string>
+
+namespace jpcr {
+
+/// Shortest round-trip representation; "nan", "inf" and "-inf" for non-finite values.
+std::string format_double(double value);
+
+/// Parses a whole token as a double; false when the token is not entirely a number.
+bool parse_double(const std::string& token, double& value);
+
+}  // namespace jpcr

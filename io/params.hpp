@@ -1,0 +1,22 @@
+// Pipeline parameters (--params FILE.yaml, default configs/default.yaml). Each component owns a
+// plain config struct with in-class defaults; this file maps the YAML sections onto them.
+#pragma once
+
+#include <string>
+
+namespace jpcr {
+
+/// Section `dataset:` of the parameter file.
+struct DatasetParams {
+  double max_time_difference = 0.02;  // s, association window of depth, colour, ground truth
+};
+
+struct Params {
+  DatasetParams dataset;
+};
+
+/// Loads a parameter file; absent keys keep their defaults. Throws InputError naming the file,
+/// line and key on an unknown key, a wrong type or a syntax error.
+Params load_params(const std::string& path);
+
+}  // namespace jpcr

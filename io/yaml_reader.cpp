@@ -1,0 +1,165 @@
+#include "jpcr/io/yaml_reader.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include "jpcr/quadric/error.hpp"
+
+namespace jpcr {
+
+namespace {
+
+std::string line_of(const YAML::Node& node) {
+  const YAML::Mark mark = node.Mark();
+  return mark.is_null() ? "" : std::to_string(mark.line + 1) + ":";
+}
+
+}  // namespace
+
+YamlSection::YamlSection(const YAML::Node& node, std::string file, std::string path)
+    : node_(node), file_(std::move(file)), path_(std::move(path)) {
+  if (node_ && !node_.IsNull() && !node_.IsMap()) {
+    throw InputError(file_ + ":" + line_of(node_) + " '" + (path_.empty() ? "<top>" : path_) +
+                     "' must be a map of key: value");
+  }
+}
+
+std::string YamlSection::qualified(const std::string& key) const {
+  return path_.empty() ? key : path_ + "." + key;
+}
+
+void YamlSection::fail(const std::string& key, const std::string& problem) const {
+  const YAML::Node& node = node_;
+  const YAML::Node n = (node && node.IsMap()) ? node[key] : YAML::Node();
+  const std::string where = n ? line_of(n) : "";
+  throw InputError(file_ + ":" + where + " key '" + qualified(key) + "': " + problem);
+}
+
+bool YamlSection::has(const std::string& key) const {
+  if (!node_ || !node_.IsMap()) return false;
+  const YAML::Node& node = node_;
+  const YAML::Node n = node[key];
+  return n && !n.IsNull();
+}
+
+bool YamlSection::take(const std::string& key, YAML::Node& out) {
+  if (!node_ || !node_.IsMap()) return false;
+  const YAML::Node& node = node_;
+  const YAML::Node n = node[key];
+  if (!n) return false;
+  used_.insert(key);  // a key given as null ("key:") is known and keeps the default
+  if (n.IsNull()) return false;
+  out = n;
+  return true;
+}
+
+void YamlSection::read(const std::string& key, double& value) {
+  YAML::Node n;
+  if (!take(key, n)) return;
+  if (!n.IsScalar()) fail(key, "expected a number");
+  double v = 0.0;
+  if (!YAML::convert<double>::decode(n, v) || !std::isfinite(v)) {
+    fail(key, "expected a finite number, got '" + n.Scalar() + "'");
+  }
+  value = v;
+}
+
+void YamlSection::read(const std::string& key, float& value) {
+  double v = value;
+  read(key, v);
+  if (std::abs(v) > std::numeric_limits<float>::max()) fail(key, "number out of range");
+  value = static_cast<float>(v);
+}
+
+void YamlSection::read(const std::string& key, int& value) {
+  YAML::Node n;
+  if (!take(key, n)) return;
+  long long v = 0;
+  if (!n.IsScalar() || !YAML::convert<long long>::decode(n, v)) {
+    fail(key, "expected an integer, got '" +
+                  (n.IsScalar() ? n.Scalar() : std::string("a list or map")) + "'");
+  }
+  if (v < std::numeric_limits<int>::min() || v > std::numeric_limits<int>::max()) {
+    fail(key, "integer out of range");
+  }
+  value = static_cast<int>(v);
+}
+
+void YamlSection::read(const std::string& key, bool& value) {
+  YAML::Node n;
+  if (!take(key, n)) return;
+  bool v = false;
+  if (!n.IsScalar() || !YAML::convert<bool>::decode(n, v)) {
+    fail(key, "expected true or false, got '" +
+                  (n.IsScalar() ? n.Scalar() : std::string("a list or map")) + "'");
+  }
+  value = v;
+}
+
+void YamlSection::read(const std::string& key, std::string& value) {
+  YAML::Node n;
+  if (!take(key, n)) return;
+  if (!n.IsScalar()) fail(key, "expected a string");
+  value = n.Scalar();
+}
+
+void YamlSection::read(const std::string& key, std::vector<double>& value) {
+  YAML::Node n;
+  if (!take(key, n)) return;
+  if (!n.IsSequence()) fail(key, "expected a list of numbers");
+  std::vector<double> out;
+  for (const YAML::Node& item : n) {
+    double v = 0.0;
+    if (!item.IsScalar() || !YAML::convert<double>::decode(item, v) || !std::isfinite(v)) {
+      fail(key, "expected a list of finite numbers");
+    }
+    out.push_back(v);
+  }
+  value = std::move(out);
+}
+
+void YamlSection::read_choice(const std::string& key, std::string& value,
+                              const std::vector<std::string>& choices) {
+  std::string v = value;
+  read(key, v);
+  for (const std::string& c : choices) {
+    if (c == v) {
+      value = v;
+      return;
+    }
+  }
+  std::string list;
+  for (const std::string& c : choices)
+    list += (list.empty() ? "" : " | ") + c;
+  fail(key, "expected one of " + list + ", got '" + v + "'");
+}
+
+YamlSection YamlSection::section(const std::string& key) {
+  YAML::Node n;
+  if (!take(key, n)) return YamlSection(YAML::Node(), file_, qualified(key));
+  return YamlSection(n, file_, qualified(key));
+}
+
+void YamlSection::finish() const {
+  if (!node_ || !node_.IsMap()) return;
+  for (const auto& item : node_) {
+    const std::string key = item.first.as<std::string>();
+    if (!used_.count(key)) {
+      throw InputError(file_ + ":" + line_of(item.first) + " unknown key '" + qualified(key) + "'");
+    }
+  }
+}
+
+YAML::Node load_yaml_file(const std::string& path) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path + ": file does not exist");
+  try {
+    return YAML::LoadFile(path);
+  } catch (const YAML::Exception& e) {
+    throw InputError(path + ":" + std::to_string(e.mark.line + 1) +
+                     ": YAML syntax error: " + e.msg);
+  }
+}
+
+}  // namespace jpcr

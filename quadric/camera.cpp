@@ -1,0 +1,59 @@
+#include "jpcr/quadric/camera.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace jpcr {
+
+bool CameraIntrinsics::has_distortion() const {
+  for (double k : distortion) {
+    if (k != 0.0) return true;
+  }
+  return false;
+}
+
+void CameraIntrinsics::validate() const {
+  auto require = [](bool ok, const char* field, const std::string& why) {
+    if (!ok) throw std::invalid_argument(std::string(field) + ": " + why);
+  };
+  require(std::isfinite(fx) && fx > 0.0, "fx", "must be a positive number of pixels");
+  require(std::isfinite(fy) && fy > 0.0, "fy", "must be a positive number of pixels");
+  require(std::isfinite(cx), "cx", "must be finite");
+  require(std::isfinite(cy), "cy", "must be finite");
+  require(width > 0 && width <= 16384, "width", "must be in 1..16384");
+  require(height > 0 && height <= 16384, "height", "must be in 1..16384");
+  require(std::isfinite(depth_scale) && depth_scale > 0.0, "depth_scale",
+          "must be positive (raw units per metre)");
+  for (double k : distortion)
+    require(std::isfinite(k), "distortion", "must be finite");
+}
+
+CameraIntrinsics CameraIntrinsics::pyramid_level(int level) const {
+  CameraIntrinsics c = *this;
+  for (int i = 0; i < level; ++i) {
+    // Pixel centres: u_coarse = (u_fine + 0.5) / 2 − 0.5.
+    c.fx *= 0.5;
+    c.fy *= 0.5;
+    c.cx = (c.cx + 0.5) * 0.5 - 0.5;
+    c.cy = (c.cy + 0.5) * 0.5 - 0.5;
+    c.width /= 2;
+    c.height /= 2;
+  }
+  return c;
+}
+
+CameraIntrinsics CameraIntrinsics::resized(int new_width, int new_height) const {
+  CameraIntrinsics c = *this;
+  const double sx = static_cast<double>(new_width) / width;
+  const double sy = static_cast<double>(new_height) / height;
+  c.fx *= sx;
+  c.fy *= sy;
+  c.cx = (cx + 0.5) * sx - 0.5;
+  c.cy = (cy + 0.5) * sy - 0.5;
+  c.width = new_width;
+  c.height = new_height;
+  return c;
+}
+
+}  // namespace jpcr

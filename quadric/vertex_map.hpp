@@ -1,0 +1,40 @@
+// Organised point clouds: one camera-frame vertex per pixel, NaN where there is no measurement.
+#pragma once
+
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Core>
+
+#include "jpcr/quadric/camera.hpp"
+#include "jpcr/quadric/image.hpp"
+
+namespace jpcr {
+
+using VertexMap = Image<Eigen::Vector3f>;
+using NormalMap = Image<Eigen::Vector3f>;
+
+/// A vertex or normal is valid when it is finite (invalid entries are all-NaN).
+inline bool is_valid(const Eigen::Vector3f& x) {
+  return std::isfinite(x.z());
+}
+
+/// A depth value is a measurement when it is finite and positive.
+inline bool is_valid_depth(float z) {
+  return std::isfinite(z) && z > 0.0f;
+}
+
+inline Eigen::Vector3f invalid_vector() {
+  return Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+}
+
+/// Back-projects every pixel; pixels without depth, or outside [min_depth, max_depth], get NaN.
+/// Throws std::invalid_argument when the image size differs from the camera's.
+VertexMap compute_vertex_map(const DepthImage& depth, const CameraIntrinsics& camera,
+                             float min_depth = 0.0f,
+                             float max_depth = std::numeric_limits<float>::infinity());
+
+/// Fraction of pixels that carry a valid depth value.
+double valid_depth_fraction(const DepthImage& depth);
+
+}  // namespace jpcr

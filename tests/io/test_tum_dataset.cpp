@@ -1,0 +1,182 @@
+// The TUM directory reader on the real fr1/xyz slice in tests/data, and every kind of bad input
+// the foundation issue lists: each is one clear InputError naming the file (and line).
+#include <filesystem>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "jpcr/io/camera_yaml.hpp"
+#include "jpcr/io/depth_png.hpp"
+#include "jpcr/io/tum_dataset.hpp"
+#include "jpcr/quadric/error.hpp"
+#include "jpcr/quadric/vertex_map.hpp"
+#include "temp_dir.hpp"
+
+namespace fs = std::filesystem;
+
+namespace jpcr {
+namespace {
+
+const std::string kFr1 = std::string(JPCR_TEST_DATA_DIR) + "/tum_fr1_xyz_20";
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+// A tiny valid TUM directory: n frames of 8x6 depth at 1 m.
+std::string make_sequence(const test::TempDir& dir, int n) {
+  std::string list = "# depth maps\n";
+  for (int i = 0; i < n; ++i) {
+    const std::string name = "depth/" + std::to_string(i) + ".png";
+    fs::create_directories(dir.file("depth"));
+    cv::imwrite(dir.file(name), cv::Mat(6, 8, CV_16UC1, cv::Scalar(5000)));
+    list += std::to_string(10 + i) + ".0 " + name + "\n";
+  }
+  dir.write("depth.txt", list);
+  return dir.path();
+}
+
+CameraIntrinsics tiny_camera() {
+  CameraIntrinsics c;
+  c.width = 8;
+  c.height = 6;
+  c.cx = 3.5;
+  c.cy = 2.5;
+  return c;
+}
+
+TEST(TumDataset, LoadsRealFr1FramesWithGroundTruth) {
+  const CameraIntrinsics camera =
+      load_camera_yaml(std::string(JPCR_SOURCE_DIR) + "/configs/ros_default.yaml");
+  const TumDataset dataset(kFr1, camera);
+  ASSERT_EQ(dataset.size(), 20u);
+  EXPECT_DOUBLE_EQ(dataset.timestamp(0), 1305031102.160407);
+  const Frame frame = dataset.load(0);
+  EXPECT_EQ(frame.depth.width(), 640);
+  const double valid = valid_depth_fraction(frame.depth);
+  EXPECT_GT(valid, 0.5);  // a Kinect frame of a desk: most pixels have depth
+  float max_depth = 0.0f;
+  for (float z : frame.depth)
+    max_depth = std::max(max_depth, z);
+  EXPECT_GT(max_depth, 0.5f);
+  EXPECT_LT(max_depth, 13.2f);  // 65535 / 5000
+  for (std::size_t i = 0; i < dataset.size(); ++i)
+    EXPECT_TRUE(dataset.ground_truth(i)) << i;
+  // The first ground-truth pose associated with 1305031102.160407 is the 1305031102.1558 line (4.6
+  // ms away).
+  const Eigen::Vector3d t0 = dataset.ground_truth(0)->translation();
+  EXPECT_NEAR(t0.x(), 1.3452, 1e-9);
+  EXPECT_EQ(dataset.ground_truth_trajectory().size(), 20u);
+}
+
+TEST(TumDataset, DistortionIsRemovedWithNearestNeighbour) {
+  const CameraIntrinsics fr1 =
+      load_camera_yaml(std::string(JPCR_SOURCE_DIR) + "/configs/tum_fr1.yaml");
+  const TumDataset dataset(kFr1, fr1);
+  const Frame frame = dataset.load(0);
+  // Nearest-neighbour remapping only moves raw values: every depth is a multiple of 1/5000 m.
+  int checked = 0;
+  for (float z : frame.depth) {
+    if (z <= 0.0f) continue;
+    const double raw = static_cast<double>(z) * 5000.0;
+    EXPECT_NEAR(raw, std::round(raw), 1e-2);
+    if (++checked > 2000) break;
+  }
+  EXPECT_GT(checked, 1000);
+}
+
+TEST(TumDataset, MissingDirectoryAndList) {
+  EXPECT_NE(error_of([] {
+              TumDataset("/no/such/dir", CameraIntrinsics());
+            }).find("/no/such/dir: dataset directory does not exist"),
+            std::string::npos);
+  test::TempDir dir;
+  EXPECT_NE(error_of([&] { TumDataset(dir.path(), CameraIntrinsics()); }).find("depth.txt"),
+            std::string::npos);
+}
+
+TEST(TumDataset, EmptySequence) {
+  test::TempDir dir;
+  dir.write("depth.txt", "# nothing here\n");
+  EXPECT_NE(error_of([&] { TumDataset(dir.path(), tiny_camera()); }).find("no depth frames"),
+            std::string::npos);
+}
+
+TEST(TumDataset, UnsortedAndDuplicateTimestamps) {
+  test::TempDir dir;
+  make_sequence(dir, 2);
+  dir.write("depth.txt", "11.0 depth/1.png\n10.0 depth/0.png\n");
+  EXPECT_NE(error_of([&] {
+              TumDataset(dir.path(), tiny_camera());
+            }).find("depth.txt:2: timestamps are not sorted"),
+            std::string::npos);
+  dir.write("depth.txt", "10.0 depth/0.png\n10.0 depth/1.png\n");
+  EXPECT_NE(error_of([&] { TumDataset(dir.path(), tiny_camera()); }).find("duplicate timestamp"),
+            std::string::npos);
+}
+
+TEST(TumDataset, ListNamingAMissingPng) {
+  test::TempDir dir;
+  make_sequence(dir, 2);
+  fs::remove(dir.file("depth/1.png"));
+  const TumDataset dataset(dir.path(), tiny_camera());
+  EXPECT_NO_THROW(dataset.load(0));
+  EXPECT_NE(error_of([&] { dataset.load(1); }).find("depth/1.png: file does not exist"),
+            std::string::npos);
+}
+
+TEST(TumDataset, CorruptAndEightBitPngsAndWrongSize) {
+  test::TempDir dir;
+  make_sequence(dir, 3);
+  dir.write("depth/0.png", "\x89PNG\r\n\x1a\n this is not really a png");
+  cv::imwrite(dir.file("depth/1.png"), cv::Mat(6, 8, CV_8UC3, cv::Scalar(1, 2, 3)));
+  cv::imwrite(dir.file("depth/2.png"), cv::Mat(5, 8, CV_16UC1, cv::Scalar(1)));
+  const TumDataset dataset(dir.path(), tiny_camera());
+  EXPECT_NE(error_of([&] { dataset.load(0); }).find("0.png: cannot be decoded"), std::string::npos);
+  EXPECT_NE(error_of([&] { dataset.load(1); }).find("expected a 16-bit single-channel depth PNG"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { dataset.load(2); }).find("image is 8x5 but the camera is 8x6"),
+            std::string::npos);
+}
+
+TEST(TumDataset, GroundTruthWithNaNIsRejectedWithLine) {
+  test::TempDir dir;
+  make_sequence(dir, 2);
+  dir.write("groundtruth.txt", "# gt\n10.0 0 0 0 0 0 0 1\n11.0 0 nan 0 0 0 0 1\n");
+  EXPECT_NE(error_of([&] {
+              TumDataset(dir.path(), tiny_camera());
+            }).find("groundtruth.txt:3: field 3 is NaN/Inf"),
+            std::string::npos);
+}
+
+TEST(TumDataset, AssociationsFileIsUsedWhenPresent) {
+  test::TempDir dir;
+  make_sequence(dir, 2);
+  dir.write("associations.txt",
+            "9.99 rgb/a.png 10.0 depth/0.png\n11.01 rgb/b.png 11.0 depth/1.png\n");
+  const TumDataset dataset(dir.path(), tiny_camera());
+  EXPECT_EQ(dataset.size(), 2u);
+  EXPECT_DOUBLE_EQ(dataset.timestamp(1), 11.0);
+}
+
+TEST(DepthPng, SaveLoadRoundTripQuantisesToTheScale) {
+  test::TempDir dir;
+  DepthImage depth(4, 2, 1.23456f);
+  depth(0, 0) = 0.0f;
+  depth(1, 0) = std::numeric_limits<float>::quiet_NaN();
+  depth(2, 0) = 100.0f;  // beyond 16 bits at scale 5000: no measurement
+  save_depth_png(dir.file("d.png"), depth, 5000.0);
+  const DepthImage back = load_depth_png(dir.file("d.png"), 5000.0);
+  EXPECT_EQ(back(0, 0), 0.0f);
+  EXPECT_EQ(back(1, 0), 0.0f);
+  EXPECT_EQ(back(2, 0), 0.0f);
+  EXPECT_NEAR(back(3, 1), 1.23456f, 0.5 / 5000.0 + 1e-6);
+}
+
+}  // namespace
+}  // namespace jpcr

@@ -1,0 +1,115 @@
+#include <gtest/gtest.h>
+
+#include "jpcr/io/timestamp_association.hpp"
+#include "jpcr/io/tum_lists.hpp"
+#include "jpcr/quadric/error.hpp"
+#include "jpcr/quadric/se3.hpp"
+#include "temp_dir.hpp"
+
+namespace jpcr {
+namespace {
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(FileList, ParsesCommentsAndEntries) {
+  const auto list = parse_file_list(
+      "# depth maps\n# x\n1.5 depth/a.png\n\n2.25 depth/b.png extra\n", "depth.txt");
+  ASSERT_EQ(list.size(), 2u);
+  EXPECT_DOUBLE_EQ(list[0].timestamp, 1.5);
+  EXPECT_EQ(list[1].path, "depth/b.png");
+  EXPECT_EQ(list[1].line, 5);
+}
+
+TEST(FileList, RejectsUnsortedDuplicateAndMalformedLinesNamingFileAndLine) {
+  EXPECT_NE(error_of([] {
+              parse_file_list("2 a.png\n1 b.png\n", "depth.txt");
+            }).find("depth.txt:2: timestamps are not sorted"),
+            std::string::npos);
+  EXPECT_NE(error_of([] {
+              parse_file_list("1 a.png\n1 b.png\n", "depth.txt");
+            }).find("depth.txt:2: duplicate timestamp"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { parse_file_list("abc a.png\n", "d.txt"); }).find("d.txt:1:"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { parse_file_list("1.0\n", "d.txt"); }).find("d.txt:1:"),
+            std::string::npos);
+  EXPECT_NE(error_of([] { parse_file_list("nan a.png\n", "d.txt"); }).find("not finite"),
+            std::string::npos);
+}
+
+TEST(Trajectory, WriteReadRoundTripIsExact) {
+  Trajectory t;
+  for (int i = 0; i < 10; ++i) {
+    Vector6d xi;
+    xi << 0.1 * i, -0.03 * i, 1.0 / 3.0, 0.01 * i, 0.2, -0.05 * i;
+    t.push_back({1305031102.160407 + 0.033 * i, se3_exp(xi)});
+  }
+  test::TempDir dir;
+  write_trajectory(dir.file("t.txt"), t, "test trajectory");
+  const Trajectory back = read_trajectory(dir.file("t.txt"));
+  ASSERT_EQ(back.size(), t.size());
+  for (std::size_t i = 0; i < t.size(); ++i) {
+    EXPECT_EQ(back[i].timestamp, t[i].timestamp);  // shortest round-trip text is exact
+    EXPECT_LT((back[i].pose.matrix() - t[i].pose.matrix()).norm(), 1e-14);
+  }
+}
+
+TEST(Trajectory, RejectsNaNWrongFieldCountBadQuaternionAndUnsortedStamps) {
+  EXPECT_NE(error_of([] {
+              parse_trajectory("1 0 0 nan 0 0 0 1\n", "est.txt");
+            }).find("est.txt:1: field 4 is NaN/Inf"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of([] { parse_trajectory("1 0 0 0 0 0 1\n", "est.txt"); }).find("expected 8 fields"),
+      std::string::npos);
+  EXPECT_NE(
+      error_of([] { parse_trajectory("1 0 0 0 0 0 0 0\n", "est.txt"); }).find("quaternion norm"),
+      std::string::npos);
+  EXPECT_NE(error_of([] {
+              parse_trajectory("2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n", "e.txt");
+            }).find("e.txt:2: timestamps are not sorted"),
+            std::string::npos);
+}
+
+TEST(Trajectory, WritingNaNPoseFailsAndLeavesNoFile) {
+  test::TempDir dir;
+  Trajectory t(1);
+  t[0].pose.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(write_trajectory(dir.file("t.txt"), t), InputError);
+  EXPECT_EQ(test::count_files(dir.path()), 0);
+}
+
+TEST(Association, GreedyByTimeDifferenceOneToOne) {
+  // Pairs closer than 0.02 s match; 2.0 has no partner within the window (2.5 is too far).
+  const std::vector<double> a{0.0, 1.0, 2.0, 3.0};
+  const std::vector<double> b{0.015, 1.004, 2.5, 2.99};
+  const auto m = associate_timestamps(a, b, 0.02);
+  ASSERT_EQ(m.size(), 3u);
+  EXPECT_EQ(m[0], std::make_pair(std::size_t{0}, std::size_t{0}));
+  EXPECT_EQ(m[1], std::make_pair(std::size_t{1}, std::size_t{1}));
+  EXPECT_EQ(m[2], std::make_pair(std::size_t{3}, std::size_t{3}));
+}
+
+TEST(Association, EachTimestampUsedOnce) {
+  const auto m = associate_timestamps({1.0, 1.01}, {1.004}, 0.02);
+  ASSERT_EQ(m.size(), 1u);
+  EXPECT_EQ(m[0].first, 0u);  // 0.004 beats 0.006
+}
+
+TEST(Association, ClosestIndex) {
+  const std::vector<double> s{0.0, 1.0, 2.0};
+  EXPECT_EQ(closest_index(s, -5.0), 0u);
+  EXPECT_EQ(closest_index(s, 0.4), 0u);
+  EXPECT_EQ(closest_index(s, 0.6), 1u);
+  EXPECT_EQ(closest_index(s, 9.0), 2u);
+}
+
+}  // namespace
+}  // namespace jpcr

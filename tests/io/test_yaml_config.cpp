@@ -1,0 +1,101 @@
+#include <gtest/gtest.h>
+
+#include "jpcr/io/camera_yaml.hpp"
+#include "jpcr/io/params.hpp"
+#include "jpcr/quadric/error.hpp"
+#include "temp_dir.hpp"
+
+namespace jpcr {
+namespace {
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+const std::string kConfigs = std::string(JPCR_SOURCE_DIR) + "/configs/";
+
+TEST(CameraYaml, ShippedCameraConfigsLoad) {
+  const CameraIntrinsics fr1 = load_camera_yaml(kConfigs + "tum_fr1.yaml");
+  EXPECT_DOUBLE_EQ(fr1.fx, 517.3);
+  EXPECT_DOUBLE_EQ(fr1.distortion[4], 1.1633);
+  EXPECT_TRUE(fr1.has_distortion());
+  const CameraIntrinsics ros = load_camera_yaml(kConfigs + "ros_default.yaml");
+  EXPECT_DOUBLE_EQ(ros.cx, 319.5);
+  EXPECT_FALSE(ros.has_distortion());
+  for (const char* name : {"tum_fr2.yaml", "tum_fr3.yaml", "synthetic.yaml"}) {
+    EXPECT_NO_THROW(load_camera_yaml(kConfigs + name)) << name;
+  }
+}
+
+TEST(CameraYaml, FormatLoadRoundTrip) {
+  CameraIntrinsics c;
+  c.fx = 517.3;
+  c.distortion = {0.1, -0.2, 0.0, 0.001, 0.3};
+  test::TempDir dir;
+  const CameraIntrinsics back = load_camera_yaml(dir.write("c.yaml", format_camera_yaml(c)));
+  EXPECT_EQ(back.fx, c.fx);
+  EXPECT_EQ(back.distortion, c.distortion);
+}
+
+TEST(CameraYaml, ErrorsNameFileLineAndKey) {
+  test::TempDir dir;
+  const std::string base = "fx: 525\nfy: 525\ncx: 319.5\ncy: 239.5\nwidth: 640\nheight: 480\n";
+  const std::string wrong_type = dir.write("t.yaml", base + "depth_scale: lots\n");
+  const std::string e1 = error_of([&] { load_camera_yaml(wrong_type); });
+  EXPECT_NE(e1.find(wrong_type + ":7: key 'depth_scale'"), std::string::npos) << e1;
+
+  const std::string missing = dir.write("m.yaml", base);
+  EXPECT_NE(error_of([&] { load_camera_yaml(missing); }).find("'depth_scale': missing"),
+            std::string::npos);
+
+  const std::string unknown = dir.write("u.yaml", base + "depth_scale: 5000\nfocal: 3\n");
+  EXPECT_NE(error_of([&] { load_camera_yaml(unknown); }).find("unknown key 'focal'"),
+            std::string::npos);
+
+  const std::string width = dir.write("w.yaml",
+                                      "fx: 525\nfy: 525\ncx: 1\ncy: 1\nwidth: 6.5\n"
+                                      "height: 480\ndepth_scale: 1\n");
+  EXPECT_NE(error_of([&] { load_camera_yaml(width); }).find("'width': expected an integer"),
+            std::string::npos);
+
+  const std::string negative = dir.write("n.yaml",
+                                         "fx: -525\nfy: 525\ncx: 1\ncy: 1\n"
+                                         "width: 6\nheight: 4\ndepth_scale: 1\n");
+  EXPECT_NE(error_of([&] { load_camera_yaml(negative); }).find("fx"), std::string::npos);
+
+  const std::string syntax = dir.write("s.yaml", "fx: [1, 2\n");
+  EXPECT_NE(error_of([&] { load_camera_yaml(syntax); }).find("YAML syntax error"),
+            std::string::npos);
+
+  const std::string dist = dir.write("d.yaml", base + "depth_scale: 1\ndistortion: [1, 2]\n");
+  EXPECT_NE(error_of([&] { load_camera_yaml(dist); }).find("list of 5 numbers"), std::string::npos);
+
+  EXPECT_NE(error_of([&] { load_camera_yaml(dir.file("absent.yaml")); }).find("does not exist"),
+            std::string::npos);
+  const std::string scalar = dir.write("x.yaml", "just a string\n");
+  EXPECT_NE(error_of([&] { load_camera_yaml(scalar); }).find("must be a map"), std::string::npos);
+}
+
+TEST(Params, DefaultFileLoadsAndUnknownKeysAreErrors) {
+  const Params p = load_params(kConfigs + "default.yaml");
+  EXPECT_DOUBLE_EQ(p.dataset.max_time_difference, 0.02);
+  test::TempDir dir;
+  const std::string bad = dir.write("p.yaml", "dataset:\n  max_time_diference: 0.1\n");
+  EXPECT_NE(error_of([&] { load_params(bad); }).find("unknown key 'dataset.max_time_diference'"),
+            std::string::npos);
+  const std::string top = dir.write("q.yaml", "datset: {}\n");
+  EXPECT_NE(error_of([&] { load_params(top); }).find("unknown key 'datset'"), std::string::npos);
+  const std::string type = dir.write("r.yaml", "dataset:\n  max_time_difference: [1]\n");
+  EXPECT_NE(error_of([&] { load_params(type); }).find("'dataset.max_time_difference'"),
+            std::string::npos);
+  const std::string empty = dir.write("e.yaml", "");
+  EXPECT_DOUBLE_EQ(load_params(empty).dataset.max_time_difference, 0.02);
+}
+
+}  // namespace
+}  // namespace jpcr

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# jpcr_eval on bad input: one clear message naming the file (and line), a non-zero exit, and no
+# partial output file.
+set -uo pipefail
+build=$1 src=$2 data=$3
+eval_bin=$build/tools/jpcr_eval
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+fail=0
+expect() {  # expect CODE PATTERN -- command...
+  local code=$1 pattern=$2; shift 3
+  local out rc
+  out=$("$@" 2>&1); rc=$?
+  if [ "$rc" != "$code" ] || ! grep -q -- "$pattern" <<<"$out"; then
+    echo "FAIL: '$*' exited $rc (want $code), output: $out (want /$pattern/)"; fail=1
+  else
+    echo "ok: $* -> $rc: $(head -1 <<<"$out")"
+  fi
+}
+printf '1 0 0 0 0 0 0 1\n2 0 0 0 0 0 0 1\n3 1 0 0 0 0 0 1\n4 1 1 0 0 0 0 1\n' > "$tmp/gt.txt"
+printf '1 0 0 0 0 0 0 1\n2 0 0 nan 0 0 0 1\n' > "$tmp/nan.txt"
+printf '2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n' > "$tmp/unsorted.txt"
+printf '# only a comment\n' > "$tmp/empty.txt"
+expect 1 "missing.txt: file does not exist" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/missing.txt"
+expect 1 "nan.txt:2: field 4 is NaN/Inf" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/nan.txt"
+expect 1 "unsorted.txt:2: timestamps are not sorted" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/unsorted.txt"
+expect 1 "empty.txt: no poses" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/empty.txt" --out "$tmp/report.json"
+expect 2 "est is required" -- "$eval_bin" traj --gt "$tmp/gt.txt"
+expect 2 "unknown option --bogus" -- "$eval_bin" traj --bogus
+expect 2 "unknown command" -- "$eval_bin" frobnicate
+expect 0 "usage: jpcr_eval traj" -- "$eval_bin" traj --help
+[ -e "$tmp/report.json" ] && { echo "FAIL: partial report written"; fail=1; }
+ls "$tmp" | grep -q '\.tmp\.' && { echo "FAIL: temporary file left behind"; fail=1; }
+exit $fail

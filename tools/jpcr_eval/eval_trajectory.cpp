@@ -1,0 +1,161 @@
+// jpcr_eval traj: ATE, RPE, paper-style relative errors and drift of an estimated trajectory.
+#include <cstdio>
+#include <iostream>
+#include <optional>
+#include <sstream>
+
+#include "cli/arguments.hpp"
+#include "jpcr/io/atomic_file.hpp"
+#include "jpcr/io/json_writer.hpp"
+#include "jpcr/io/trajectory_metrics.hpp"
+#include "jpcr/io/tum_lists.hpp"
+#include "jpcr/quadric/error.hpp"
+#include "jpcr_eval/eval_commands.hpp"
+
+namespace jpcr::eval {
+
+namespace {
+
+struct TrajectoryReport {
+  std::size_t gt_poses = 0, est_poses = 0;
+  AteResult ate;
+  RpeResult rpe_frame;
+  std::optional<RpeResult> rpe_second;  // absent when the sequence is shorter than 1 s
+  RelativeErrors relative;
+  DriftCurve drift;
+};
+
+void write_statistics(JsonWriter& json, const char* name, const ErrorStatistics& s) {
+  json.key(name).begin_object();
+  json.field("rmse", s.rmse).field("mean", s.mean).field("median", s.median);
+  json.field("max", s.max).field("count", s.count);
+  json.end_object();
+}
+
+void write_json(std::ostream& out, const TrajectoryReport& r) {
+  JsonWriter json(out);
+  json.begin_object();
+  json.field("gt_poses", r.gt_poses).field("est_poses", r.est_poses);
+  json.key("ate");
+  json.begin_object();
+  write_statistics(json, "translation_m", r.ate.translation);
+  json.end_object();
+  json.key("rpe_per_frame").begin_object();
+  write_statistics(json, "translation_m", r.rpe_frame.translation);
+  write_statistics(json, "rotation_deg", r.rpe_frame.rotation);
+  json.end_object();
+  json.key("rpe_per_second");
+  if (r.rpe_second) {
+    json.begin_object();
+    write_statistics(json, "translation_m", r.rpe_second->translation);
+    write_statistics(json, "rotation_deg", r.rpe_second->rotation);
+    json.end_object();
+  } else {
+    json.null();
+  }
+  json.key("relative").begin_object();
+  json.field("translation_rms_m", r.relative.translation_rms);
+  json.field("rotation_rms_rad", r.relative.rotation_rms);
+  json.field("pairs", r.relative.pairs);
+  json.end_object();
+  json.key("drift").begin_object();
+  json.field("distance_m", r.drift.distance.empty() ? 0.0 : r.drift.distance.back());
+  json.field("final_translation_m", r.drift.translation.empty() ? 0.0 : r.drift.translation.back());
+  json.field("final_rotation_deg", r.drift.rotation.empty() ? 0.0 : r.drift.rotation.back());
+  json.field("translation_per_metre", r.drift.translation_per_metre);
+  json.field("rotation_deg_per_metre", r.drift.rotation_per_metre);
+  json.field("curve_distance_m", r.drift.distance);
+  json.field("curve_translation_m", r.drift.translation);
+  json.field("curve_rotation_deg", r.drift.rotation);
+  json.end_object();
+  json.end_object();
+}
+
+void write_text(std::ostream& out, const TrajectoryReport& r) {
+  char line[256];
+  std::snprintf(line, sizeof(line), "poses: %zu ground truth, %zu estimated\n", r.gt_poses,
+                r.est_poses);
+  out << line;
+  const ErrorStatistics& a = r.ate.translation;
+  std::snprintf(line, sizeof(line),
+                "ATE            rmse %.6f m   mean %.6f  median %.6f  max %.6f  (%zu pairs)\n",
+                a.rmse, a.mean, a.median, a.max, a.count);
+  out << line;
+  std::snprintf(
+      line, sizeof(line), "RPE per frame  rmse %.6f m   %.6f deg              (%zu pairs)\n",
+      r.rpe_frame.translation.rmse, r.rpe_frame.rotation.rmse, r.rpe_frame.translation.count);
+  out << line;
+  if (r.rpe_second) {
+    std::snprintf(line, sizeof(line),
+                  "RPE per second rmse %.6f m/s %.6f deg/s            (%zu pairs)\n",
+                  r.rpe_second->translation.rmse, r.rpe_second->rotation.rmse,
+                  r.rpe_second->translation.count);
+    out << line;
+  } else {
+    out << "RPE per second n/a (sequence shorter than 1 s)\n";
+  }
+  std::snprintf(line, sizeof(line),
+                "relative (paper Tables I-III) translation %.3e m  rotation %.3e rad (%zu pairs)\n",
+                r.relative.translation_rms, r.relative.rotation_rms, r.relative.pairs);
+  out << line;
+  if (!r.drift.distance.empty()) {
+    std::snprintf(
+        line, sizeof(line),
+        "drift          %.6f m and %.4f deg after %.3f m travelled (%.3f %%, %.4f deg/m)\n",
+        r.drift.translation.back(), r.drift.rotation.back(), r.drift.distance.back(),
+        100.0 * r.drift.translation_per_metre, r.drift.rotation_per_metre);
+    out << line;
+  }
+}
+
+}  // namespace
+
+int run_trajectory(int argc, char** argv) {
+  cli::Arguments args("jpcr_eval traj",
+                      "Trajectory error against ground truth, with the TUM RGB-D benchmark "
+                      "conventions:\nATE (Horn alignment, no scale), RPE per frame and per second "
+                      "(no alignment),\npaper-style RMS relative translation (m) and rotation "
+                      "(rad), and drift against\ndistance travelled.");
+  args.required("gt", "ground-truth trajectory, TUM format (timestamp tx ty tz qx qy qz qw)")
+      .required("est", "estimated trajectory, TUM format")
+      .option("max-difference", "timestamp association window in seconds", "0.02")
+      .option("out", "also write the JSON report to this file")
+      .flag("json", "print JSON instead of text")
+      .epilog(
+          "example:\n  jpcr_eval traj --gt data/groundtruth.txt --est out/trajectory.txt --json");
+  return cli::run_program("jpcr_eval traj", [&] {
+    if (!args.parse(argc, argv)) return 0;
+    const double max_difference = args.get_double("max-difference");
+    if (!(max_difference > 0.0)) throw cli::UsageError("--max-difference must be positive");
+    const Trajectory gt = read_trajectory(args.get("gt"));
+    const Trajectory est = read_trajectory(args.get("est"));
+    if (gt.empty()) throw InputError(args.get("gt") + ": no poses");
+    if (est.empty()) throw InputError(args.get("est") + ": no poses");
+
+    TrajectoryReport report;
+    report.gt_poses = gt.size();
+    report.est_poses = est.size();
+    report.ate = compute_ate(gt, est, max_difference);
+    report.rpe_frame = compute_rpe(gt, est, 1.0, DeltaUnit::kFrames);
+    if (est.back().timestamp - est.front().timestamp > 1.0) {
+      try {
+        report.rpe_second = compute_rpe(gt, est, 1.0, DeltaUnit::kSeconds);
+      } catch (const InputError&) {
+        report.rpe_second.reset();
+      }
+    }
+    report.relative = compute_relative_errors(gt, est, max_difference);
+    report.drift = compute_drift(gt, est, max_difference);
+
+    if (args.has("out")) {
+      write_file_atomically(args.get("out"), [&](std::ostream& out) { write_json(out, report); });
+    }
+    if (args.get_flag("json"))
+      write_json(std::cout, report);
+    else
+      write_text(std::cout, report);
+    return 0;
+  });
+}
+
+}  // namespace jpcr::eval

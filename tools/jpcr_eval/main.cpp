@@ -1,0 +1,30 @@
+// jpcr_eval: error metrics of trajectories (TUM conventions) and curvature maps.
+#include <cstring>
+#include <iostream>
+#include <string>
+
+#include "cli/arguments.hpp"
+#include "jpcr_eval/eval_commands.hpp"
+
+namespace {
+
+constexpr const char* kUsage =
+    "usage: jpcr_eval COMMAND [options]\n\n"
+    "Evaluates jpcr results against ground truth.\n\n"
+    "commands:\n"
+    "  traj        trajectory error: ATE, RPE per frame and per second, paper-style relative\n"
+    "              errors and drift (jpcr_eval traj --gt GT.txt --est EST.txt [--json])\n\n"
+    "Run 'jpcr_eval COMMAND --help' for the options of a command.\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || !std::strcmp(argv[1], "--help") || !std::strcmp(argv[1], "-h")) {
+    std::cout << kUsage;
+    return argc < 2 ? 2 : 0;
+  }
+  const std::string command = argv[1];
+  if (command == "traj") return jpcr::eval::run_trajectory(argc - 1, argv + 1);
+  std::cerr << "jpcr_eval: unknown command '" << command << "'\n" << kUsage;
+  return 2;
+}

@@ -1,0 +1,13 @@
+#!/usr/bin/env bash
+# Builds jpcr and runs the whole test suite (the README's test command; .ci/run calls it).
+# Environment: JPCR_BUILD_DIR (default build), JPCR_CMAKE_ARGS (extra configure arguments).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+tools/setup.sh
+
+build=${JPCR_BUILD_DIR:-build}
+jobs=$(nproc)
+# shellcheck disable=SC2086
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release ${JPCR_CMAKE_ARGS:-}
+cmake --build "$build" -j"$jobs"
+ctest --test-dir "$build" --output-on-failure -j"$jobs"
