@@ -91,9 +91,7 @@ CameraIntrinsics synthetic_camera(int width, int height) {
   return (width == 640 && height == 480) ? camera : camera.resized(width, height);
 }
 
-SyntheticFrame render(const SyntheticScene& scene, const CameraIntrinsics& camera,
-                      const Eigen::Isometry3d& pose_wc, const NoiseModel& noise, std::uint64_t seed,
-                      std::uint64_t frame_index, double timestamp) {
+void check_synthetic_camera(const CameraIntrinsics& camera) {
   try {
     camera.validate();
   } catch (const std::invalid_argument& e) {
@@ -102,6 +100,12 @@ SyntheticFrame render(const SyntheticScene& scene, const CameraIntrinsics& camer
   if (camera.has_distortion()) {
     throw InputError("synthetic camera: the renderer is an ideal pinhole; distortion must be zero");
   }
+}
+
+SyntheticFrame render(const SyntheticScene& scene, const CameraIntrinsics& camera,
+                      const Eigen::Isometry3d& pose_wc, const NoiseModel& noise, std::uint64_t seed,
+                      std::uint64_t frame_index, double timestamp) {
+  check_synthetic_camera(camera);
   const int width = camera.width, height = camera.height;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   SyntheticFrame out;

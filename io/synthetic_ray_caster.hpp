@@ -40,6 +40,10 @@ struct SyntheticFrame {
 /// principal point at the centre, scaled to width x height with the same field of view.
 CameraIntrinsics synthetic_camera(int width = 640, int height = 480);
 
+/// Throws InputError when the camera is invalid or has lens distortion (the renderer is an
+/// ideal pinhole).
+void check_synthetic_camera(const CameraIntrinsics& camera);
+
 /// Renders one frame; `frame_index` and `seed` select the noise. Throws InputError when the
 /// camera is invalid or has lens distortion (the renderer is an ideal pinhole).
 SyntheticFrame render(const SyntheticScene& scene, const CameraIntrinsics& camera,

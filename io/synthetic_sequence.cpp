@@ -14,6 +14,7 @@ SyntheticSequence::SyntheticSequence(SyntheticScene scene, const CameraIntrinsic
       noise_(std::move(noise)),
       seed_(seed) {
   if (trajectory_.empty()) throw InputError("a synthetic sequence needs at least one pose");
+  check_synthetic_camera(camera_);
 }
 
 std::string SyntheticSequence::description() const {

@@ -21,7 +21,8 @@ namespace jpcr {
 
 class SyntheticSequence final : public FrameSource {
  public:
-  /// Frame i is rendered at trajectory[i] with noise seeded by (seed, i).
+  /// Frame i is rendered at trajectory[i] with noise seeded by (seed, i). Throws InputError for
+  /// an empty trajectory or a camera render() rejects.
   SyntheticSequence(SyntheticScene scene, const CameraIntrinsics& camera, Trajectory trajectory,
                     NoiseModel noise = {}, std::uint64_t seed = 0);
 

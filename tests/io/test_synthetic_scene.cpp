@@ -1,10 +1,12 @@
 // Scene YAML (strict, with errors naming file and key), scene lookup by name, and the shipped
 // scenes: each is seen well from every pose of its default trajectories.
+#include <algorithm>
 #include <cstdlib>
-#include <functional>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
+#include "input_error.hpp"
 #include "jpcr/io/synthetic_ray_caster.hpp"
 #include "jpcr/io/synthetic_trajectory.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -13,14 +15,7 @@
 namespace jpcr {
 namespace {
 
-std::string error_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "<no error>";
-}
+using test::input_error_of;
 
 const std::string kView = "view: {eye: [0, -2, 1], target: [0, 0, 1]}\n";
 
@@ -55,7 +50,7 @@ TEST(SyntheticScene, BadYamlNamesFileLineAndKey) {
   test::TempDir dir;
   const auto error_for = [&](const std::string& text) {
     const std::string path = dir.write("bad.yaml", text);
-    return error_of([&] { load_scene(path); });
+    return input_error_of([&] { load_scene(path); });
   };
   const std::string sphere = "  - {type: sphere, center: [0, 0, 0], radius: 1}\n";
   struct Case {
@@ -112,10 +107,10 @@ TEST(SyntheticScene, NamesResolveOnTheSearchPathAndPathsAsGiven) {
     EXPECT_EQ(scene.name, expected);
     EXPECT_FALSE(scene.description.empty());
   }
-  const std::string missing = error_of([] { load_scene("no_such_scene"); });
+  const std::string missing = input_error_of([] { load_scene("no_such_scene"); });
   EXPECT_NE(missing.find("scene 'no_such_scene' not found"), std::string::npos) << missing;
   EXPECT_NE(missing.find(std::string(JPCR_SOURCE_DIR) + "/configs/scenes"), std::string::npos);
-  EXPECT_NE(error_of([] { load_scene("nowhere/x.yaml"); }).find("scene file does not exist"),
+  EXPECT_NE(input_error_of([] { load_scene("nowhere/x.yaml"); }).find("scene file does not exist"),
             std::string::npos);
 
   // $JPCR_SCENE_PATH comes first.
