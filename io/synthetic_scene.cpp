@@ -1,7 +1,5 @@
 #include "jpcr/io/synthetic_scene.hpp"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
