@@ -2,6 +2,7 @@
 
 #include <sstream>
 
+#include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/number_format.hpp"
 #include "jpcr/io/yaml_reader.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -9,7 +10,11 @@
 namespace jpcr {
 
 CameraIntrinsics load_camera_yaml(const std::string& path) {
-  YamlSection yaml(load_yaml_file(path), path);
+  return parse_camera_yaml(read_file(path), path);
+}
+
+CameraIntrinsics parse_camera_yaml(const std::string& text, const std::string& path) {
+  YamlSection yaml(parse_yaml(text, path), path);
   for (const char* key : {"fx", "fy", "cx", "cy", "width", "height", "depth_scale"}) {
     if (!yaml.has(key))
       yaml.fail(key, "missing (a camera needs fx, fy, cx, cy, width, height, depth_scale)");

@@ -12,6 +12,9 @@ namespace jpcr {
 /// invalid value.
 CameraIntrinsics load_camera_yaml(const std::string& path);
 
+/// The same from YAML text; `name` stands for the file in messages.
+CameraIntrinsics parse_camera_yaml(const std::string& text, const std::string& name);
+
 /// The YAML text of a camera, loadable by load_camera_yaml.
 std::string format_camera_yaml(const CameraIntrinsics& camera);
 

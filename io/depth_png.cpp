@@ -22,22 +22,37 @@ std::string describe(const cv::Mat& m) {
   return std::string(bits) + " with " + std::to_string(m.channels()) + " channel(s)";
 }
 
-cv::Mat decode(const std::string& path, int flags) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": file does not exist");
-  const std::string bytes = read_file(path);
+bool starts_with(const std::string& bytes, const char* magic, std::size_t length) {
+  return bytes.size() >= length && bytes.compare(0, length, magic, length) == 0;
+}
+
+// Only PNG and JPEG reach OpenCV: cv::imdecode otherwise tries every codec it was built with, and
+// some (GDCM's DICOM reader) abort the process on malformed input, which fuzzing found.
+cv::Mat decode(const std::string& bytes, const std::string& name, int flags) {
+  if (bytes.empty()) throw InputError(name + ": empty file, not an image");
+  const bool png = starts_with(bytes, "\x89PNG\r\n\x1a\n", 8);
+  const bool jpeg = starts_with(bytes, "\xff\xd8\xff", 3);
+  if (!png && !jpeg) throw InputError(name + ": not a PNG or JPEG file");
   const cv::Mat buffer(1, static_cast<int>(bytes.size()), CV_8UC1, const_cast<char*>(bytes.data()));
   cv::Mat image;
   try {
     image = cv::imdecode(buffer, flags);
   } catch (const cv::Exception& e) {
-    throw InputError(path + ": cannot be decoded as an image (" + e.msg + ")");
+    throw InputError(name + ": cannot be decoded as an image (" + e.msg + ")");
   }
-  if (image.empty())
-    throw InputError(path + ": cannot be decoded as an image (corrupt or not a PNG)");
+  if (image.empty()) {
+    throw InputError(name + ": cannot be decoded as an image (corrupt or not a PNG)");
+  }
   return image;
 }
 
+cv::Mat decode_file(const std::string& path, int flags) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) {
+    throw InputError(path + ": file does not exist");
+  }
+  return decode(read_file(path), path, flags);
+}
 void write_encoded(const std::string& path, const cv::Mat& image) {
   std::vector<unsigned char> encoded;
   if (!cv::imencode(".png", image, encoded)) throw InputError(path + ": PNG encoding failed");
@@ -51,7 +66,12 @@ void write_encoded(const std::string& path, const cv::Mat& image) {
 
 DepthImage load_depth_png(const std::string& path, double depth_scale, int expected_width,
                           int expected_height) {
-  const cv::Mat raw = decode(path, cv::IMREAD_UNCHANGED);
+  return decode_depth_png(read_file(path), path, depth_scale, expected_width, expected_height);
+}
+
+DepthImage decode_depth_png(const std::string& bytes, const std::string& path, double depth_scale,
+                            int expected_width, int expected_height) {
+  const cv::Mat raw = decode(bytes, path, cv::IMREAD_UNCHANGED);
   if (raw.type() != CV_16UC1) {
     throw InputError(path + ": expected a 16-bit single-channel depth PNG, got " + describe(raw));
   }
@@ -85,7 +105,7 @@ void save_depth_png(const std::string& path, const DepthImage& depth, double dep
 }
 
 ColorImage load_color_image(const std::string& path) {
-  const cv::Mat bgr = decode(path, cv::IMREAD_COLOR);
+  const cv::Mat bgr = decode_file(path, cv::IMREAD_COLOR);
   ColorImage image(bgr.cols, bgr.rows);
   for (int v = 0; v < bgr.rows; ++v) {
     const auto* row = bgr.ptr<cv::Vec3b>(v);

@@ -13,6 +13,10 @@ namespace jpcr {
 DepthImage load_depth_png(const std::string& path, double depth_scale, int expected_width = 0,
                           int expected_height = 0);
 
+/// The same from the bytes of a PNG file; `path` stands for the file in messages.
+DepthImage decode_depth_png(const std::string& bytes, const std::string& path, double depth_scale,
+                            int expected_width = 0, int expected_height = 0);
+
 /// Writes metres as a 16-bit PNG at depth_scale, atomically. Non-finite, non-positive or
 /// out-of-range depths are written as 0 (no measurement).
 void save_depth_png(const std::string& path, const DepthImage& depth, double depth_scale);

@@ -1,5 +1,6 @@
 #include "jpcr/io/params.hpp"
 
+#include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/yaml_reader.hpp"
 #include "jpcr/quadric/error.hpp"
 
@@ -66,7 +67,11 @@ void read_synthetic(YamlSection yaml, SyntheticParams& p) {
 }  // namespace
 
 Params load_params(const std::string& path) {
-  YamlSection yaml(load_yaml_file(path), path);
+  return parse_params(read_file(path), path);
+}
+
+Params parse_params(const std::string& text, const std::string& path) {
+  YamlSection yaml(parse_yaml(text, path), path);
   Params params;
   read_dataset(yaml.section("dataset"), params.dataset);
   read_synthetic(yaml.section("synthetic"), params.synthetic);

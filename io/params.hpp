@@ -29,4 +29,7 @@ struct Params {
 /// line and key on an unknown key, a wrong type or a syntax error.
 Params load_params(const std::string& path);
 
+/// The same from YAML text; `name` stands for the file in messages.
+Params parse_params(const std::string& text, const std::string& name);
+
 }  // namespace jpcr

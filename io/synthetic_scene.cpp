@@ -189,13 +189,7 @@ BoundingSphere bounding_sphere(const Surface& surface) {
 
 SyntheticScene parse_scene(const std::string& yaml_text, const std::string& file,
                            const std::string& name) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw InputError(file + ":" + std::to_string(e.mark.line + 1) +
-                     ": YAML syntax error: " + e.msg);
-  }
+  const YAML::Node root = parse_yaml(yaml_text, file);
   YamlSection yaml(root, file);
   SyntheticScene scene;
   scene.name = name;

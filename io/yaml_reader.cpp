@@ -1,9 +1,9 @@
 #include "jpcr/io/yaml_reader.hpp"
 
 #include <cmath>
-#include <filesystem>
 #include <limits>
 
+#include "jpcr/io/atomic_file.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
@@ -154,7 +154,11 @@ std::vector<YamlSection> YamlSection::sections(const std::string& key) {
 void YamlSection::finish() const {
   if (!node_ || !node_.IsMap()) return;
   for (const auto& item : node_) {
-    const std::string key = item.first.as<std::string>();
+    if (!item.first.IsScalar()) {
+      throw InputError(file_ + ":" + line_of(item.first) + " a key under '" +
+                       (path_.empty() ? "<top>" : path_) + "' is not a plain name");
+    }
+    const std::string key = item.first.Scalar();
     if (!used_.count(key)) {
       throw InputError(file_ + ":" + line_of(item.first) + " unknown key '" + qualified(key) + "'");
     }
@@ -162,14 +166,25 @@ void YamlSection::finish() const {
 }
 
 YAML::Node load_yaml_file(const std::string& path) {
-  std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw InputError(path + ": file does not exist");
+  return parse_yaml(read_file(path), path);
+}
+
+YAML::Node parse_yaml(const std::string& text, const std::string& name) {
+  // yaml-cpp parses recursively; refuse absurd nesting before it can overflow the stack.
+  constexpr int kMaxDepth = 64;
+  int depth = 0;
+  for (char c : text) {
+    if (c == '[' || c == '{') {
+      if (++depth > kMaxDepth) throw InputError(name + ": YAML nested too deeply");
+    } else if ((c == ']' || c == '}') && depth > 0) {
+      --depth;
+    }
+  }
   try {
-    return YAML::LoadFile(path);
+    return YAML::Load(text);
   } catch (const YAML::Exception& e) {
-    throw InputError(path + ":" + std::to_string(e.mark.line + 1) +
+    throw InputError(name + ":" + std::to_string(e.mark.line + 1) +
                      ": YAML syntax error: " + e.msg);
   }
 }
-
 }  // namespace jpcr

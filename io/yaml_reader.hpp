@@ -70,4 +70,8 @@ class YamlSection {
 /// Loads a YAML file; throws InputError naming the file on a missing file or a syntax error.
 YAML::Node load_yaml_file(const std::string& path);
 
+/// Parses YAML text; `name` is used in messages. Throws InputError on a syntax error or on
+/// nesting deeper than a config ever needs (deep nesting would exhaust yaml-cpp's stack).
+YAML::Node parse_yaml(const std::string& text, const std::string& name);
+
 }  // namespace jpcr

@@ -9,6 +9,7 @@ packages=(
   libceres-dev libopencv-dev libmrpt-obs-dev mrpt-common
   cyclonedds-dev cyclonedds-tools
   python3-numpy python3-matplotlib
+  clang libclang-rt-14-dev
 )
 
 missing=()

@@ -11,3 +11,8 @@ jobs=$(nproc)
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release ${JPCR_CMAKE_ARGS:-}
 cmake --build "$build" -j"$jobs"
 ctest --test-dir "$build" --output-on-failure -j"$jobs"
+
+# Robustness job: ASan+UBSan build of the CPU suite and bounded libFuzzer runs.
+if [ "${JPCR_SKIP_SANITIZERS:-0}" != "1" ]; then
+  tools/check_sanitizers.sh
+fi

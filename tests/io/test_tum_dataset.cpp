@@ -138,6 +138,11 @@ TEST(TumDataset, CorruptAndEightBitPngsAndWrongSize) {
   cv::imwrite(dir.file("depth/2.png"), cv::Mat(5, 8, CV_16UC1, cv::Scalar(1)));
   const TumDataset dataset(dir.path(), tiny_camera());
   EXPECT_NE(error_of([&] { dataset.load(0); }).find("0.png: cannot be decoded"), std::string::npos);
+  // Bytes that are no PNG never reach OpenCV's other codecs (GDCM aborted on such input).
+  const std::string regression =
+      std::string(JPCR_SOURCE_DIR) + "/tests/fuzz/corpus/fuzz_depth_png/regression_gdcm_assert";
+  EXPECT_NE(error_of([&] { load_depth_png(regression, 5000.0); }).find("not a PNG or JPEG file"),
+            std::string::npos);
   EXPECT_NE(error_of([&] { dataset.load(1); }).find("expected a 16-bit single-channel depth PNG"),
             std::string::npos);
   EXPECT_NE(error_of([&] { dataset.load(2); }).find("image is 8x5 but the camera is 8x6"),

@@ -1,0 +1,36 @@
+#include "jpcr/io/open_dataset.hpp"
+
+#include <filesystem>
+
+#include "jpcr/io/camera_yaml.hpp"
+#include "jpcr/io/rawlog_dataset.hpp"
+#include "jpcr/io/tum_dataset.hpp"
+#include "jpcr/quadric/error.hpp"
+
+namespace fs = std::filesystem;
+
+namespace jpcr {
+
+std::unique_ptr<FrameSource> open_dataset(const std::string& path,
+                                          const std::optional<CameraIntrinsics>& camera,
+                                          const DatasetParams& params) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) {
+    std::optional<CameraIntrinsics> cam = camera;
+    const fs::path own = fs::path(path) / "camera.yaml";
+    if (!cam && fs::exists(own, ec)) cam = load_camera_yaml(own.string());
+    if (!cam) {
+      throw InputError(path +
+                       ": no camera given (pass --config CAM.yaml, e.g. configs/tum_fr1.yaml)");
+    }
+    TumDatasetOptions options;
+    options.max_time_difference = params.max_time_difference;
+    return std::make_unique<TumDataset>(path, *cam, options);
+  }
+  if (fs::path(path).extension() == ".rawlog") return std::make_unique<RawlogDataset>(path, camera);
+  if (!fs::exists(path, ec)) throw InputError(path + ": dataset does not exist");
+  throw InputError(path +
+                   ": not a dataset (expected a TUM RGB-D directory or an MRPT .rawlog file)");
+}
+
+}  // namespace jpcr

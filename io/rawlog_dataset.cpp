@@ -1,0 +1,178 @@
+#include "jpcr/io/rawlog_dataset.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <limits>
+
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include "jpcr/quadric/error.hpp"
+
+namespace jpcr {
+
+using mrpt::obs::CObservation3DRangeScan;
+
+struct RawlogDataset::Scans {
+  std::vector<CObservation3DRangeScan::Ptr> observations;
+};
+
+namespace {
+
+void collect(const mrpt::obs::CObservation::Ptr& o,
+             std::vector<CObservation3DRangeScan::Ptr>& out) {
+  auto scan = std::dynamic_pointer_cast<CObservation3DRangeScan>(o);
+  if (scan && scan->hasRangeImage) out.push_back(scan);
+}
+
+CameraIntrinsics camera_of(const CObservation3DRangeScan& scan) {
+  CameraIntrinsics c;
+  const mrpt::img::TCamera& p = scan.cameraParams;
+  c.fx = p.fx();
+  c.fy = p.fy();
+  c.cx = p.cx();
+  c.cy = p.cy();
+  c.width = static_cast<int>(p.ncols);
+  c.height = static_cast<int>(p.nrows);
+  c.depth_scale = 1.0 / static_cast<double>(scan.rangeUnits);
+  for (std::size_t i = 0; i < c.distortion.size(); ++i)
+    c.distortion[i] = p.dist[i];
+  return c;
+}
+
+}  // namespace
+
+RawlogDataset::RawlogDataset(const std::string& path, const std::optional<CameraIntrinsics>& camera)
+    : path_(path), scans_(std::make_unique<Scans>()) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": file does not exist");
+  // Read object by object (instead of CRawlog::loadFromRawLogFile, which prints MRPT's stack
+  // traces on bad input): EOF ends the file, any other failure is a corrupt rawlog.
+  std::size_t objects = 0;
+  try {
+    mrpt::io::CFileGZInputStream file(path);
+    auto archive = mrpt::serialization::archiveFrom(file);
+    for (;; ++objects) {
+      mrpt::serialization::CSerializable::Ptr object;
+      try {
+        archive >> object;
+      } catch (const mrpt::serialization::CExceptionEOF&) {
+        break;
+      }
+      if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(object)) {
+        collect(o, scans_->observations);
+      } else if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(object)) {
+        for (const auto& so : *sf)
+          collect(so, scans_->observations);
+      }
+    }
+  } catch (const std::exception&) {
+    throw InputError(path + ": not a readable MRPT rawlog (object " + std::to_string(objects) +
+                     " cannot be parsed)");
+  }
+  if (scans_->observations.empty()) {
+    throw InputError(path + ": the rawlog holds no CObservation3DRangeScan with a range image");
+  }
+  camera_ = camera ? *camera : camera_of(*scans_->observations.front());
+  if (!camera) camera_.distortion = {};  // MRPT range images are used as stored
+  try {
+    camera_.validate();
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path + ": invalid camera in the rawlog: " + e.what());
+  }
+}
+
+RawlogDataset::~RawlogDataset() = default;
+
+std::size_t RawlogDataset::size() const {
+  return scans_->observations.size();
+}
+
+double RawlogDataset::timestamp(std::size_t index) const {
+  return mrpt::Clock::toDouble(scans_->observations.at(index)->timestamp);
+}
+
+Frame RawlogDataset::load(std::size_t index) const {
+  const CObservation3DRangeScan& scan = *scans_->observations.at(index);
+  try {
+    scan.load();  // externally stored range images
+  } catch (const std::exception& e) {
+    throw InputError(path_ + ": scan " + std::to_string(index) + ": " + e.what());
+  }
+  const auto& range = scan.rangeImage;
+  if (range.cols() != camera_.width || range.rows() != camera_.height) {
+    throw InputError(path_ + ": scan " + std::to_string(index) + " is " +
+                     std::to_string(range.cols()) + "x" + std::to_string(range.rows()) +
+                     " but the camera is " + std::to_string(camera_.width) + "x" +
+                     std::to_string(camera_.height));
+  }
+  Frame frame;
+  frame.timestamp = timestamp(index);
+  frame.camera = camera_;
+  frame.depth = DepthImage(camera_.width, camera_.height, 0.0f);
+  const double units = scan.rangeUnits;
+  for (int v = 0; v < camera_.height; ++v) {
+    for (int u = 0; u < camera_.width; ++u) {
+      double value = range(v, u) * units;
+      if (!scan.range_is_depth && value > 0.0) {
+        // A range along the ray: depth = range / |ray| with ray = ((u−cx)/fx, (v−cy)/fy, 1).
+        const double kx = (u - camera_.cx) / camera_.fx, ky = (v - camera_.cy) / camera_.fy;
+        value /= std::sqrt(1.0 + kx * kx + ky * ky);
+      }
+      frame.depth(u, v) = static_cast<float>(value);
+    }
+  }
+  return frame;
+}
+
+std::string RawlogDataset::description() const {
+  return "MRPT rawlog " + path_ + ": " + std::to_string(size()) + " 3-D range scans, " +
+         std::to_string(camera_.width) + "x" + std::to_string(camera_.height) + ", no ground truth";
+}
+
+void write_rawlog(const std::string& path, const std::vector<Frame>& frames) {
+  const std::string tmp = path + ".tmp";
+  try {
+    mrpt::io::CFileGZOutputStream file(tmp);
+    auto archive = mrpt::serialization::archiveFrom(file);
+    for (const Frame& frame : frames) {
+      auto scan = CObservation3DRangeScan::Create();
+      const CameraIntrinsics& c = frame.camera;
+      scan->timestamp = mrpt::Clock::fromDouble(frame.timestamp);
+      scan->sensorLabel = "jpcr_depth";
+      scan->hasRangeImage = true;
+      scan->range_is_depth = true;
+      scan->rangeUnits = static_cast<float>(1.0 / c.depth_scale);
+      scan->rangeImage_setSize(frame.depth.height(), frame.depth.width());
+      for (int v = 0; v < frame.depth.height(); ++v) {
+        for (int u = 0; u < frame.depth.width(); ++u) {
+          const double raw = static_cast<double>(frame.depth(u, v)) * c.depth_scale;
+          scan->rangeImage(v, u) = (std::isfinite(raw) && raw > 0.0 && raw < 65535.5)
+                                       ? static_cast<std::uint16_t>(std::lround(raw))
+                                       : 0;
+        }
+      }
+      scan->cameraParams.ncols = static_cast<uint32_t>(c.width);
+      scan->cameraParams.nrows = static_cast<uint32_t>(c.height);
+      scan->cameraParams.setIntrinsicParamsFromValues(c.fx, c.fy, c.cx, c.cy);
+      for (std::size_t i = 0; i < c.distortion.size(); ++i)
+        scan->cameraParams.dist[i] = c.distortion[i];
+      scan->cameraParamsIntensity = scan->cameraParams;
+      archive << *scan;
+    }
+  } catch (const std::exception& e) {
+    std::filesystem::remove(tmp);
+    throw InputError(path + ": cannot write the rawlog (" + std::string(e.what()) + ")");
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, path, ec);
+  if (ec) {
+    std::filesystem::remove(tmp);
+    throw InputError(path + ": cannot be renamed into place (" + ec.message() + ")");
+  }
+}
+
+}  // namespace jpcr

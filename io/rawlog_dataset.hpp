@@ -1,0 +1,42 @@
+// MRPT rawlogs as a depth source: every CObservation3DRangeScan with a range image, in either
+// rawlog format (observations, or sensory frames). The intrinsics come from the observations'
+// depth camera unless a camera file overrides them. Rawlogs carry no ground truth.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "jpcr/io/frame_source.hpp"
+
+namespace jpcr {
+
+class RawlogDataset final : public FrameSource {
+ public:
+  /// Loads the rawlog; throws InputError naming the file when it cannot be read, holds no 3-D
+  /// range scan with a range image, or its scans disagree in size. `camera` overrides the
+  /// intrinsics stored in the file (its size must match the range images).
+  explicit RawlogDataset(const std::string& path,
+                         const std::optional<CameraIntrinsics>& camera = std::nullopt);
+  ~RawlogDataset() override;
+
+  std::size_t size() const override;
+  double timestamp(std::size_t index) const override;
+  Frame load(std::size_t index) const override;
+  std::optional<Eigen::Isometry3d> ground_truth(std::size_t) const override { return {}; }
+  const CameraIntrinsics& camera() const override { return camera_; }
+  std::string description() const override;
+
+ private:
+  struct Scans;
+  std::string path_;
+  CameraIntrinsics camera_;
+  std::unique_ptr<Scans> scans_;
+};
+
+/// Writes frames as a rawlog of CObservation3DRangeScan (range = depth, units 1/depth_scale of
+/// each frame's camera, intrinsics from the frame), atomically. For tests and conversions.
+void write_rawlog(const std::string& path, const std::vector<Frame>& frames);
+
+}  // namespace jpcr

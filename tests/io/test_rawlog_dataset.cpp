@@ -1,0 +1,98 @@
+// MRPT rawlogs as a third dataset kind: the real sample rawlog of mrpt-common, a round trip of
+// real TUM frames through a rawlog the test writes, and bad input.
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "jpcr/io/camera_yaml.hpp"
+#include "jpcr/io/open_dataset.hpp"
+#include "jpcr/io/rawlog_dataset.hpp"
+#include "jpcr/io/tum_dataset.hpp"
+#include "jpcr/quadric/error.hpp"
+#include "jpcr/quadric/vertex_map.hpp"
+#include "temp_dir.hpp"
+
+namespace jpcr {
+namespace {
+
+const std::string kSample = "/usr/share/mrpt/datasets/tests_rgbd.rawlog";
+const std::string kFr1 = std::string(JPCR_TEST_DATA_DIR) + "/tum_fr1_xyz_20";
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "<no error>";
+}
+
+TEST(RawlogDataset, ReadsTheMrptSampleRawlog) {
+  if (!std::filesystem::exists(kSample)) GTEST_SKIP() << "mrpt-common is not installed";
+  const RawlogDataset rawlog(kSample);
+  ASSERT_EQ(rawlog.size(), 1u);
+  EXPECT_EQ(rawlog.camera().width, 640);
+  EXPECT_NEAR(rawlog.camera().fx, 572.883, 1e-3);
+  EXPECT_NEAR(rawlog.camera().depth_scale, 1000.0, 1e-3);  // millimetre units
+  const Frame frame = rawlog.load(0);
+  EXPECT_GT(valid_depth_fraction(frame.depth), 0.3);
+  EXPECT_GT(frame.timestamp, 1.4e9);
+  EXPECT_FALSE(rawlog.ground_truth(0));
+}
+
+TEST(RawlogDataset, RoundTripOfRealFramesIsExact) {
+  const CameraIntrinsics camera =
+      load_camera_yaml(std::string(JPCR_SOURCE_DIR) + "/configs/ros_default.yaml");
+  const TumDataset tum(kFr1, camera);
+  std::vector<Frame> frames;
+  for (std::size_t i = 0; i < 4; ++i)
+    frames.push_back(tum.load(i));
+  test::TempDir dir;
+  const std::string path = dir.file("fr1.rawlog");
+  write_rawlog(path, frames);
+  const auto source = open_dataset(path, std::nullopt);
+  ASSERT_EQ(source->size(), frames.size());
+  EXPECT_DOUBLE_EQ(source->camera().fx, camera.fx);
+  EXPECT_DOUBLE_EQ(source->camera().cy, camera.cy);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    const Frame back = source->load(i);
+    EXPECT_NEAR(back.timestamp, frames[i].timestamp, 1e-6);  // MRPT stores 100 ns ticks
+    int differing = 0;
+    for (std::size_t k = 0; k < back.depth.size(); ++k) {
+      differing += std::abs(back.depth[k] - frames[i].depth[k]) > 1e-6f ? 1 : 0;
+    }
+    EXPECT_EQ(differing, 0) << "frame " << i;
+  }
+}
+
+TEST(RawlogDataset, BadInputNamesTheFile) {
+  test::TempDir dir;
+  EXPECT_NE(error_of([&] { RawlogDataset(dir.file("none.rawlog")); }).find("does not exist"),
+            std::string::npos);
+  const std::string garbage = dir.write("garbage.rawlog", std::string(5000, '\x42'));
+  EXPECT_NE(error_of([&] { RawlogDataset r(garbage); }).find("garbage.rawlog"), std::string::npos);
+  Frame frame;
+  frame.camera.width = 8;
+  frame.camera.height = 6;
+  frame.depth = DepthImage(8, 6, 1.0f);
+  write_rawlog(dir.file("two.rawlog"), {frame, frame});
+  std::filesystem::resize_file(dir.file("two.rawlog"),
+                               std::filesystem::file_size(dir.file("two.rawlog")) / 2);
+  EXPECT_NE(error_of([&] { RawlogDataset r(dir.file("two.rawlog")); }).find("not a readable"),
+            std::string::npos);
+  write_rawlog(dir.file("empty.rawlog"), {});
+  EXPECT_NE(error_of([&] {
+              RawlogDataset r(dir.file("empty.rawlog"));
+            }).find("no CObservation3DRangeScan"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { open_dataset(dir.file("x.txt"), std::nullopt); }).find("does not exist"),
+            std::string::npos);
+  const std::string text = dir.write("notes.txt", "hello");
+  EXPECT_NE(error_of([&] { open_dataset(text, std::nullopt); }).find("not a dataset"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] { open_dataset(kFr1, std::nullopt); }).find("no camera given"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace jpcr
