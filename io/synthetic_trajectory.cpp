@@ -13,6 +13,7 @@ namespace {
 
 constexpr double kTwoPi = 2.0 * EIGEN_PI;
 constexpr double kDegree = EIGEN_PI / 180.0;
+constexpr double kMinWeight = 0.5;  // the sinusoids' relative amplitudes are in [kMinWeight, 1]
 
 // Three random sinusoids for each of three coordinates, zero at t = 0:
 //   x_j(t) = Σ_k A_jk (sin(2π f_jk t + φ_jk) − sin φ_jk).
@@ -20,17 +21,17 @@ constexpr double kDegree = EIGEN_PI / 180.0;
 //   |dx/dt|² ≤ Σ_j (Σ_k A_jk 2π f_jk)².
 class SmoothRandomMotion {
  public:
-  SmoothRandomMotion(const CounterRandom& random, std::uint64_t first, double max_rate,
-                     double min_period, double max_period) {
+  SmoothRandomMotion(const CounterRandom& random, double max_rate, double min_period,
+                     double max_period) {
     double bound = 0.0;
-    std::uint64_t n = first;
+    std::uint64_t n = 0;
     for (auto& axis : waves_) {
       double axis_bound = 0.0;
       for (Wave& w : axis) {
         const double period = min_period + (max_period - min_period) * random.uniform(n++);
         w.angular_frequency = kTwoPi / period;
         w.phase = kTwoPi * random.uniform(n++);
-        w.amplitude = 0.5 + 0.5 * random.uniform(n++);  // relative weights in [0.5, 1]
+        w.amplitude = kMinWeight + (1.0 - kMinWeight) * random.uniform(n++);
         axis_bound += w.amplitude * w.angular_frequency;
       }
       bound += axis_bound * axis_bound;
@@ -122,11 +123,13 @@ Trajectory make_trajectory(TrajectoryKind kind, const SceneView& view, int frame
   }
   if (frames < 1) throw InputError("a trajectory needs at least 1 frame");
   const Eigen::Vector3d up = view.up.normalized();
-  const CounterRandom random(seed, RandomStream::kWalk, 0);
-  const SmoothRandomMotion walk_position(random, 0, params.walk_max_speed, params.walk_min_period,
+  // The walk's position and head rotation draw from two keys of the seed's walk stream.
+  const SmoothRandomMotion walk_position(CounterRandom(seed, RandomStream::kWalk, 0),
+                                         params.walk_max_speed, params.walk_min_period,
                                          params.walk_max_period);
-  const SmoothRandomMotion walk_head(random, 1000, params.walk_max_head_rate * kDegree,
-                                     params.walk_min_period, params.walk_max_period);
+  const SmoothRandomMotion walk_head(CounterRandom(seed, RandomStream::kWalk, 1),
+                                     params.walk_max_head_rate * kDegree, params.walk_min_period,
+                                     params.walk_max_period);
   Trajectory trajectory(static_cast<std::size_t>(frames));
   for (int i = 0; i < frames; ++i) {
     const double t = i / params.rate;

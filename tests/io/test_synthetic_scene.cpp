@@ -132,7 +132,7 @@ struct Coverage {
 };
 
 Coverage coverage(const SyntheticScene& scene, TrajectoryKind kind, int frames, int every) {
-  const CameraIntrinsics camera = synthetic_camera(80, 60);
+  const CameraIntrinsics camera = synthetic_camera(64, 48);
   const Trajectory trajectory = make_trajectory(kind, scene.view, frames, {}, 1);
   Coverage c;
   for (int i = 0; i < frames; i += every) {
@@ -153,13 +153,14 @@ Coverage coverage(const SyntheticScene& scene, TrajectoryKind kind, int frames, 
 }
 
 TEST(SyntheticScene, ShippedScenesFillTheViewFromEveryDefaultPose) {
-  // Thresholds sit below the values measured at 80x60 (docs in each scene file): the room
-  // scenes have 100 % surface, ≥ 80 % of it at 0.8–4.5 m and ≥ 15 % curved from every pose of
-  // a full orbit, a 900-frame walk and a 3 m rail; rail_wall along a 12 m rail.
+  // Every pose sampled from a full orbit, a 900-frame walk and a 3 m rail of the room scenes
+  // sees a surface in every pixel; measured minima at 64x48: 81 % of the pixels at 0.8–4.5 m
+  // (cylinders_boxes, orbit) and 14.5 % curved (cylinders_boxes, rail). rail_wall along a 12 m
+  // rail: all at 0.8–4.5 m, 4.6 % curved. The thresholds leave a margin below those.
   for (const char* name : {"room_spheres", "cylinders_boxes", "torus_saddle"}) {
     const SyntheticScene scene = load_scene(name);
     for (const auto& [kind, frames, every] :
-         {std::tuple{TrajectoryKind::kOrbit, 1440, 20}, std::tuple{TrajectoryKind::kWalk, 900, 30},
+         {std::tuple{TrajectoryKind::kOrbit, 1440, 40}, std::tuple{TrajectoryKind::kWalk, 900, 60},
           std::tuple{TrajectoryKind::kRail, 300, 30}}) {
       const Coverage c = coverage(scene, kind, frames, every);
       EXPECT_EQ(c.surface, 1.0) << name << " " << to_string(kind);
@@ -167,7 +168,7 @@ TEST(SyntheticScene, ShippedScenesFillTheViewFromEveryDefaultPose) {
       EXPECT_GE(c.curved, 0.10) << name << " " << to_string(kind);
     }
   }
-  const Coverage wall = coverage(load_scene("rail_wall"), TrajectoryKind::kRail, 1200, 25);
+  const Coverage wall = coverage(load_scene("rail_wall"), TrajectoryKind::kRail, 1200, 50);
   EXPECT_EQ(wall.surface, 1.0);
   EXPECT_EQ(wall.in_range, 1.0);
   EXPECT_GE(wall.curved, 0.02);  // "a mostly planar wall with some relief"

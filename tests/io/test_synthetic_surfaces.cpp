@@ -32,7 +32,8 @@ TEST(SyntheticSurfaces, BallFromOutsideIsNegativeAndFromInsidePositive) {
   std::uniform_real_distribution<double> offset(-0.6, 0.6);
   int hits = 0;
   for (int i = 0; i < 200; ++i) {
-    const Eigen::Vector3d aim = ball.center + Eigen::Vector3d(offset(rng), offset(rng), 0.0);
+    const double dx = offset(rng), dy = offset(rng);
+    const Eigen::Vector3d aim = ball.center + Eigen::Vector3d(dx, dy, 0.0);
     const auto hit = cast_ray(scene, ray_through(Eigen::Vector3d::Zero(), aim));
     if (!hit) continue;
     ++hits;
@@ -184,20 +185,31 @@ std::optional<double> sphere_trace(const TorusImplicit& f, const Ray& ray) {
   return std::nullopt;
 }
 
+// Uniform in [−1, 1]³, drawn in a fixed order (the order in which function arguments are
+// evaluated is unspecified, and differs between compilers).
+Eigen::Vector3d random_vector(std::mt19937& rng) {
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  Eigen::Vector3d v;
+  for (int i = 0; i < 3; ++i)
+    v[i] = unit(rng);
+  return v;
+}
+
 TEST(SyntheticSurfaces, TorusMatchesItsImplicitEquationAndClosedForm) {
   std::mt19937 rng(7);
-  std::uniform_real_distribution<double> unit(-1.0, 1.0);
   int hits = 0, saddles = 0, grazing_checked = 0;
   for (int trial = 0; trial < 20; ++trial) {
     Torus torus;
-    torus.center = Eigen::Vector3d(unit(rng), unit(rng), 3.0 + unit(rng));
-    torus.axis = Eigen::Vector3d(unit(rng), unit(rng), unit(rng)).normalized();
-    torus.major_radius = 0.5 + 0.2 * unit(rng);
-    torus.minor_radius = 0.1 + 0.05 * unit(rng);
+    const Eigen::Vector3d shape = random_vector(rng);
+    torus.center = random_vector(rng) + Eigen::Vector3d(0, 0, 3);
+    torus.axis = random_vector(rng).normalized();
+    torus.major_radius = 0.5 + 0.2 * shape.x();
+    torus.minor_radius = 0.1 + 0.05 * shape.y();
     const TorusImplicit f{torus};
     const SyntheticScene scene = scene_of({torus});
     for (int i = 0; i < 200; ++i) {
-      const Eigen::Vector3d aim = torus.center + 0.8 * Eigen::Vector3d(unit(rng), unit(rng), 0.0);
+      const Eigen::Vector3d aim =
+          torus.center + 0.8 * random_vector(rng).cwiseProduct(Eigen::Vector3d(1, 1, 0));
       const Ray ray = ray_through(Eigen::Vector3d::Zero(), aim);
       const auto hit = cast_ray(scene, ray);
       const std::optional<double> traced = sphere_trace(f, ray);
@@ -220,8 +232,9 @@ TEST(SyntheticSurfaces, TorusMatchesItsImplicitEquationAndClosedForm) {
       grazing_checked += std::abs(hit->normal.dot(ray.direction)) < 0.2;
     }
   }
-  EXPECT_GT(hits, 800);
-  EXPECT_GT(saddles, 100) << "the inner half of a torus is a saddle (κ1 > 0 > κ2)";
+  // This seed gives 931 hits, 398 on saddles and 31 grazing: the checks are not vacuous.
+  EXPECT_GT(hits, 700);
+  EXPECT_GT(saddles, 200) << "the inner half of a torus is a saddle (κ1 > 0 > κ2)";
   EXPECT_GT(grazing_checked, 20) << "grazing hits (near-double roots) are covered";
 }
 
