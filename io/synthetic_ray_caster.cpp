@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "jpcr/io/synthetic_tiles.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
@@ -15,67 +16,6 @@ namespace {
 // Tells smooth patches apart for the footprint test: surface index and face (< 8 per surface).
 std::int32_t patch_id(const std::optional<SurfaceHit>& hit) {
   return hit ? hit->surface * 8 + hit->patch : -1;
-}
-
-// The unit direction, in camera axes, of the ray through (continuous) pixel (u, v).
-Eigen::Vector3d pixel_direction(const CameraIntrinsics& c, double u, double v) {
-  return backproject(u, v, 1.0, c.fx, c.fy, c.cx, c.cy).normalized();
-}
-
-// Pixels are cast in square tiles, and each tile only tests the surfaces whose bounding sphere
-// meets the cone around its rays (pixel corners included).
-constexpr int kTile = 16;            // px
-constexpr double kConeSlack = 1e-9;  // rad, keeps the culling conservative under rounding
-
-struct Tiles {
-  int columns = 0;
-  std::vector<std::vector<int>> candidates;  // per tile, row-major
-  const std::vector<int>& at(int u, int v) const {
-    return candidates[static_cast<std::size_t>(v / kTile) * columns + u / kTile];
-  }
-};
-
-// A ray within angle α of the cone axis d0 meets a sphere seen at angle θ from d0 under angular
-// radius asin(r / distance) only if θ − α ≤ asin(r / distance).
-Tiles cull_surfaces(const SyntheticScene& scene, const CameraIntrinsics& camera,
-                    const Eigen::Isometry3d& pose_wc) {
-  std::vector<BoundingSphere> spheres;  // in camera axes
-  for (const Surface& s : scene.surfaces) {
-    BoundingSphere b = bounding_sphere(s);
-    b.center = pose_wc.inverse() * b.center;
-    spheres.push_back(b);
-  }
-  Tiles tiles;
-  tiles.columns = (camera.width + kTile - 1) / kTile;
-  const int rows = (camera.height + kTile - 1) / kTile;
-  tiles.candidates.resize(static_cast<std::size_t>(tiles.columns) * rows);
-  for (int ty = 0; ty < rows; ++ty) {
-    for (int tx = 0; tx < tiles.columns; ++tx) {
-      const double u0 = tx * kTile - 0.5, u1 = std::min((tx + 1) * kTile, camera.width) - 0.5;
-      const double v0 = ty * kTile - 0.5, v1 = std::min((ty + 1) * kTile, camera.height) - 0.5;
-      const Eigen::Vector3d axis = pixel_direction(camera, 0.5 * (u0 + u1), 0.5 * (v0 + v1));
-      double alpha = 0.0;
-      for (const double u : {u0, u1}) {
-        for (const double v : {v0, v1}) {
-          alpha =
-              std::max(alpha, std::acos(std::min(1.0, axis.dot(pixel_direction(camera, u, v)))));
-        }
-      }
-      std::vector<int>& list = tiles.candidates[static_cast<std::size_t>(ty) * tiles.columns + tx];
-      for (std::size_t i = 0; i < spheres.size(); ++i) {
-        const double distance = spheres[i].center.norm();
-        const double radius = spheres[i].radius;
-        bool visible = !std::isfinite(radius) || distance <= radius;
-        if (!visible) {
-          const double theta =
-              std::acos(std::clamp(axis.dot(spheres[i].center) / distance, -1.0, 1.0));
-          visible = theta - alpha <= std::asin(radius / distance) + kConeSlack;
-        }
-        if (visible) list.push_back(static_cast<int>(i));
-      }
-    }
-  }
-  return tiles;
 }
 
 }  // namespace
@@ -120,12 +60,12 @@ SyntheticFrame render(const SyntheticScene& scene, const CameraIntrinsics& camer
   Image<std::int32_t> corner_patch(width + 1, height + 1, -1);  // pixel corners (u ± ½, v ± ½)
   const Eigen::Matrix3d R = pose_wc.linear();
   const Eigen::Vector3d origin = pose_wc.translation();
-  const Tiles tiles = cull_surfaces(scene, camera, pose_wc);
+  const SurfaceTiles tiles(scene, camera, pose_wc);
 
 #pragma omp parallel for schedule(dynamic, 2)
   for (int v = 0; v < height; ++v) {
     for (int u = 0; u < width; ++u) {
-      const Eigen::Vector3d d = pixel_direction(camera, u, v);
+      const Eigen::Vector3d d = pixel_ray_direction(camera, u, v);
       const std::optional<SurfaceHit> hit = cast_ray(scene, Ray{origin, R * d}, tiles.at(u, v));
       if (!hit) continue;
       out.exact_depth(u, v) = static_cast<float>(hit->range * d.z());  // z along the optical axis
@@ -138,7 +78,7 @@ SyntheticFrame render(const SyntheticScene& scene, const CameraIntrinsics& camer
 #pragma omp parallel for schedule(dynamic, 2)
   for (int v = 0; v <= height; ++v) {
     for (int u = 0; u <= width; ++u) {
-      const Eigen::Vector3d d = pixel_direction(camera, u - 0.5, v - 0.5);
+      const Eigen::Vector3d d = pixel_ray_direction(camera, u - 0.5, v - 0.5);
       const std::vector<int>& candidates =
           tiles.at(std::min(u, width - 1), std::min(v, height - 1));
       corner_patch(u, v) = patch_id(cast_ray(scene, Ray{origin, R * d}, candidates));
