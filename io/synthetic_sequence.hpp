@@ -35,7 +35,8 @@ class SyntheticSequence final : public FrameSource {
   const CameraIntrinsics& camera() const override { return camera_; }
   std::string description() const override;
 
-  /// Frame `index` with its exact ground truth.
+  /// Frame `index` with its exact ground truth. Like load(), a pure function of the index:
+  /// frames can be rendered in any order, also from several threads at once.
   SyntheticFrame render(std::size_t index) const;
 
   const SyntheticScene& scene() const { return scene_; }
