@@ -4,6 +4,9 @@
 
 #include <string>
 
+#include "jpcr/io/synthetic_noise.hpp"
+#include "jpcr/io/synthetic_trajectory.hpp"
+
 namespace jpcr {
 
 /// Section `dataset:` of the parameter file.
@@ -11,8 +14,15 @@ struct DatasetParams {
   double max_time_difference = 0.02;  // s, association window of depth, colour, ground truth
 };
 
+/// Section `synthetic:` (jpcr_synth): trajectory shapes and the Kinect noise model.
+struct SyntheticParams {
+  TrajectoryParams trajectory;
+  KinectNoiseParams kinect;
+};
+
 struct Params {
   DatasetParams dataset;
+  SyntheticParams synthetic;
 };
 
 /// Loads a parameter file; absent keys keep their defaults. Throws InputError naming the file,

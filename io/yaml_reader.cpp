@@ -141,6 +141,16 @@ YamlSection YamlSection::section(const std::string& key) {
   return YamlSection(n, file_, qualified(key));
 }
 
+std::vector<YamlSection> YamlSection::sections(const std::string& key) {
+  YAML::Node n;
+  std::vector<YamlSection> items;
+  if (!take(key, n)) return items;
+  if (!n.IsSequence()) fail(key, "expected a list of maps");
+  for (std::size_t i = 0; i < n.size(); ++i)
+    items.emplace_back(n[i], file_, qualified(key) + "[" + std::to_string(i) + "]");
+  return items;
+}
+
 void YamlSection::finish() const {
   if (!node_ || !node_.IsMap()) return;
   for (const auto& item : node_) {

@@ -48,6 +48,10 @@ class YamlSection {
   /// A nested map (absent reads as empty). The child must be finished by the caller.
   YamlSection section(const std::string& key);
 
+  /// A list of maps (absent reads as empty), named "key[i]" in messages. Each must be finished
+  /// by the caller.
+  std::vector<YamlSection> sections(const std::string& key);
+
   /// Throws InputError naming the first key that was never read.
   void finish() const;
 

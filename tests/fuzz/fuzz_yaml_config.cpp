@@ -1,9 +1,11 @@
-// libFuzzer target: camera and parameter YAML load or fail with an InputError naming the key.
+// libFuzzer target: camera, parameter and synthetic scene YAML load or fail with an InputError
+// naming the key.
 #include <cstdint>
 #include <string>
 
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/params.hpp"
+#include "jpcr/io/synthetic_scene.hpp"
 #include "jpcr/quadric/error.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
@@ -14,6 +16,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   try {
     jpcr::parse_params(text, "fuzz.yaml");
+  } catch (const jpcr::InputError&) {
+  }
+  try {
+    jpcr::parse_scene(text, "fuzz.yaml", "fuzz");
   } catch (const jpcr::InputError&) {
   }
   return 0;

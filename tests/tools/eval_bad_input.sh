@@ -5,17 +5,8 @@ set -uo pipefail
 build=$1 src=$2 data=$3
 eval_bin=$build/tools/jpcr_eval
 tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
-fail=0
-expect() {  # expect CODE PATTERN -- command...
-  local code=$1 pattern=$2; shift 3
-  local out rc
-  out=$("$@" 2>&1); rc=$?
-  if [ "$rc" != "$code" ] || ! grep -q -- "$pattern" <<<"$out"; then
-    echo "FAIL: '$*' exited $rc (want $code), output: $out (want /$pattern/)"; fail=1
-  else
-    echo "ok: $* -> $rc: $(head -1 <<<"$out")"
-  fi
-}
+# shellcheck source=expect.sh
+source "$src/tests/tools/expect.sh"
 printf '1 0 0 0 0 0 0 1\n2 0 0 0 0 0 0 1\n3 1 0 0 0 0 0 1\n4 1 1 0 0 0 0 1\n' > "$tmp/gt.txt"
 printf '1 0 0 0 0 0 0 1\n2 0 0 nan 0 0 0 1\n' > "$tmp/nan.txt"
 printf '2 0 0 0 0 0 0 1\n1 0 0 0 0 0 0 1\n' > "$tmp/unsorted.txt"

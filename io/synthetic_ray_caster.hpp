@@ -1,0 +1,58 @@
+// Ray-traced RGB-D frames of a synthetic scene with exact per-pixel ground truth.
+//
+//   SyntheticFrame f = render(scene, synthetic_camera(), pose_wc, parse_noise("range:1"), seed, i);
+//   f.frame            the depth frame a sensor would give (noisy depth in metres, 0 = none)
+//   f.curvature(u, v)  exact (κ1, κ2) of the surface seen at the pixel centre, NaN where none
+//
+// One ray through each pixel centre of an ideal pinhole camera (method.md §1: depth is z along
+// the optical axis). Rendering is multithreaded (OpenMP) and deterministic: a frame is a pure
+// function of (scene, camera, pose, noise, seed, frame_index).
+#pragma once
+
+#include <cstdint>
+
+#include "jpcr/io/synthetic_noise.hpp"
+#include "jpcr/io/synthetic_scene.hpp"
+#include "jpcr/quadric/frame.hpp"
+#include "jpcr/quadric/vertex_map.hpp"
+
+namespace jpcr {
+
+using CurvatureImage = Image<Eigen::Vector2f>;
+
+struct SyntheticFrame {
+  /// Timestamp, noisy depth (m, 0 = no measurement), the camera, and colour shaded by normal.
+  Frame frame;
+  Eigen::Isometry3d pose_wc = Eigen::Isometry3d::Identity();  // exact camera-to-world pose
+  DepthImage exact_depth;  // noise-free z (m), 0 where the ray hits nothing
+  /// Principal curvatures κ1 ≥ κ2 (1/m) with method.md §1's sign (normal toward the camera, a
+  /// surface bulging toward the camera is negative). NaN where the ray hits nothing, and where
+  /// the pixel's footprint is not one smooth patch — the rays through its four corners hit
+  /// another surface or face than its centre (box edges, cylinder rims, silhouettes) — since
+  /// curvature is undefined on a crease. The footprint test does not see a surface occluding
+  /// another part of itself (e.g. a torus), where the centre value is still exact.
+  CurvatureImage curvature;
+  NormalMap normals;            // camera frame, unit, toward the camera; NaN where none
+  Image<std::int32_t> surface;  // index into scene.surfaces, −1 where none
+};
+
+/// The default synthetic camera (configs/synthetic.yaml): 640x480 with fx = fy = 550 and the
+/// principal point at the centre, scaled to width x height with the same field of view.
+CameraIntrinsics synthetic_camera(int width = 640, int height = 480);
+
+/// Throws InputError when the camera is invalid or has lens distortion (the renderer is an
+/// ideal pinhole).
+void check_synthetic_camera(const CameraIntrinsics& camera);
+
+/// Renders one frame; `frame_index` and `seed` select the noise. Throws InputError when the
+/// camera is invalid or has lens distortion (the renderer is an ideal pinhole).
+SyntheticFrame render(const SyntheticScene& scene, const CameraIntrinsics& camera,
+                      const Eigen::Isometry3d& pose_wc, const NoiseModel& noise = {},
+                      std::uint64_t seed = 0, std::uint64_t frame_index = 0,
+                      double timestamp = 0.0);
+
+/// A colour picture of a normal map: RGB = 255 (1 + (n_x, n_y, −n_z)) / 2 in camera axes,
+/// black where there is no normal.
+ColorImage shade_normals(const NormalMap& normals);
+
+}  // namespace jpcr

@@ -1,0 +1,107 @@
+#include "jpcr/io/synthetic_writer.hpp"
+
+#include <cstdio>
+#include <filesystem>
+#include <future>
+#include <sstream>
+
+#include "jpcr/io/atomic_file.hpp"
+#include "jpcr/io/camera_yaml.hpp"
+#include "jpcr/io/depth_png.hpp"
+#include "jpcr/io/npy.hpp"
+#include "jpcr/io/tum_lists.hpp"
+#include "jpcr/quadric/error.hpp"
+
+namespace fs = std::filesystem;
+
+namespace jpcr {
+
+namespace {
+
+static_assert(sizeof(Eigen::Vector2f) == 2 * sizeof(float), "curvature pixels must be packed");
+static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "normal pixels must be packed");
+
+void prepare_directory(const std::string& directory, bool force) {
+  std::error_code ec;
+  if (fs::exists(directory, ec)) {
+    if (!fs::is_directory(directory, ec)) {
+      throw InputError(directory + ": output path exists and is not a directory");
+    }
+    if (!force && !fs::is_empty(directory, ec)) {
+      throw InputError(directory +
+                       ": output directory is not empty (use --force to write into it)");
+    }
+  }
+  for (const char* sub : {"depth", "rgb", "curvature", "normals"})
+    ensure_directory((fs::path(directory) / sub).string());
+}
+
+// A TUM file list: "# comment" lines, a header, then "<stamp> <folder>/<stamp>.<ext>".
+std::string file_list(const std::vector<std::string>& stamps, const std::string& folder,
+                      const std::string& extension, const std::string& comment) {
+  std::ostringstream out;
+  std::istringstream comments(comment);
+  for (std::string line; std::getline(comments, line);)
+    out << "# " << line << '\n';
+  out << "# timestamp filename\n";
+  for (const std::string& stamp : stamps)
+    out << stamp << ' ' << folder << '/' << stamp << extension << '\n';
+  return out.str();
+}
+
+void write_text(const std::string& path, const std::string& text) {
+  write_file_atomically(path, [&](std::ostream& out) { out << text; });
+}
+
+}  // namespace
+
+std::string format_stamp(double timestamp) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.6f", timestamp);
+  return text;
+}
+
+void write_synthetic_sequence(const SyntheticSequence& sequence, const std::string& directory,
+                              const SyntheticWriterOptions& options) {
+  prepare_directory(directory, options.force);
+  const fs::path dir(directory);
+  const CameraIntrinsics& camera = sequence.camera();
+  const std::size_t width = static_cast<std::size_t>(camera.width);
+  const std::size_t height = static_cast<std::size_t>(camera.height);
+  const auto write_frame = [&](const SyntheticFrame& f, const std::string& stamp) {
+    save_depth_png((dir / "depth" / (stamp + ".png")).string(), f.frame.depth, camera.depth_scale);
+    save_color_png((dir / "rgb" / (stamp + ".png")).string(), f.frame.color);
+    write_npy((dir / "curvature" / (stamp + ".npy")).string(), {height, width, 2},
+              f.curvature.data()->data());
+    write_npy((dir / "normals" / (stamp + ".npy")).string(), {height, width, 3},
+              f.normals.data()->data());
+  };
+  // Frame i is encoded and written on a second thread while frame i + 1 is rendered.
+  std::vector<std::string> stamps;
+  std::future<void> writing;
+  for (std::size_t i = 0; i < sequence.size(); ++i) {
+    SyntheticFrame f = sequence.render(i);
+    const std::string stamp = format_stamp(f.frame.timestamp);
+    if (!stamps.empty() && stamp == stamps.back()) {
+      throw InputError(directory + ": frames " + std::to_string(i - 1) + " and " +
+                       std::to_string(i) + " share the timestamp " + stamp +
+                       " (the frame rate is above 1 MHz)");
+    }
+    stamps.push_back(stamp);
+    if (writing.valid()) {
+      writing.get();  // rethrows a failed write
+      if (options.progress) options.progress(i, sequence.size());
+    }
+    writing = std::async(std::launch::async,
+                         [&write_frame, f = std::move(f), stamp] { write_frame(f, stamp); });
+  }
+  writing.get();
+  if (options.progress) options.progress(sequence.size(), sequence.size());
+  write_text((dir / "rgb.txt").string(), file_list(stamps, "rgb", ".png", options.comment));
+  write_trajectory((dir / "groundtruth.txt").string(), sequence.trajectory(), options.comment);
+  write_text((dir / "camera.yaml").string(),
+             "# " + sequence.description() + "\n" + format_camera_yaml(camera));
+  write_text((dir / "depth.txt").string(), file_list(stamps, "depth", ".png", options.comment));
+}
+
+}  // namespace jpcr

@@ -1,0 +1,120 @@
+// The TUM layout written by the generator reads back through the foundation's TUM reader with
+// the exact poses, the depth to PNG quantisation, and the ground-truth maps bit for bit.
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "jpcr/io/camera_yaml.hpp"
+#include "jpcr/io/depth_png.hpp"
+#include "jpcr/io/npy.hpp"
+#include "jpcr/io/synthetic_writer.hpp"
+#include "jpcr/io/tum_dataset.hpp"
+#include "jpcr/quadric/error.hpp"
+#include "temp_dir.hpp"
+
+namespace jpcr {
+namespace {
+
+SyntheticSequence small_sequence(const std::string& noise, TrajectoryKind kind) {
+  SyntheticSequenceOptions options;
+  options.scene = "torus_saddle";
+  options.trajectory = kind;
+  options.frames = 6;
+  options.noise = noise;
+  options.width = 64;
+  options.height = 48;
+  options.seed = 4;
+  return make_synthetic_sequence(options);
+}
+
+bool same_bits(const float* a, const float* b, std::size_t n) {
+  return std::memcmp(a, b, n * sizeof(float)) == 0;
+}
+
+TEST(SyntheticWriter, RoundTripThroughTheTumReader) {
+  const SyntheticSequence seq = small_sequence("range:1", TrajectoryKind::kWalk);
+  test::TempDir dir;
+  const std::string out = dir.file("seq");
+  std::size_t progress = 0;
+  SyntheticWriterOptions options;
+  options.progress = [&](std::size_t done, std::size_t total) {
+    EXPECT_EQ(total, 6u);
+    EXPECT_EQ(done, progress + 1);
+    progress = done;
+  };
+  write_synthetic_sequence(seq, out, options);
+  EXPECT_EQ(progress, 6u);
+
+  const CameraIntrinsics camera = load_camera_yaml(out + "/camera.yaml");
+  EXPECT_EQ(camera.fx, seq.camera().fx);
+  EXPECT_EQ(camera.width, 64);
+  TumDatasetOptions tum;
+  tum.load_color = true;
+  const TumDataset data(out, camera, tum);
+  ASSERT_EQ(data.size(), seq.size());
+  const double half_quantum = 0.5 / camera.depth_scale;  // PNG stores depth in 0.2 mm steps
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    const SyntheticFrame expected = seq.render(i);
+    EXPECT_EQ(data.timestamp(i), seq.timestamp(i));
+    // Poses go through text at full precision (shortest round-trip doubles).
+    const auto gt = data.ground_truth(i);
+    ASSERT_TRUE(gt);
+    EXPECT_LT((gt->matrix() - expected.pose_wc.matrix()).cwiseAbs().maxCoeff(), 1e-15);
+    const Frame frame = data.load(i);
+    for (std::size_t p = 0; p < frame.depth.size(); ++p) {
+      const float z = expected.frame.depth[p];
+      if (z > 0.0f)
+        EXPECT_NEAR(frame.depth[p], z, half_quantum + 1e-6 * z);
+      else
+        EXPECT_EQ(frame.depth[p], 0.0f);
+    }
+    for (std::size_t p = 0; p < frame.color.size(); ++p) {
+      EXPECT_EQ(frame.color[p].r, expected.frame.color[p].r);
+      EXPECT_EQ(frame.color[p].b, expected.frame.color[p].b);
+    }
+    // Ground-truth maps: float32 H×W×2 and H×W×3, identical bits (NaN included).
+    const std::string stamp = format_stamp(seq.timestamp(i));
+    const NpyArray k = read_npy(out + "/curvature/" + stamp + ".npy");
+    EXPECT_EQ(k.dtype, "f4");
+    EXPECT_EQ(k.shape, (std::vector<std::size_t>{48, 64, 2}));
+    EXPECT_TRUE(same_bits(k.to_float().data(), expected.curvature.data()->data(), 48 * 64 * 2));
+    const NpyArray n = read_npy(out + "/normals/" + stamp + ".npy");
+    EXPECT_EQ(n.shape, (std::vector<std::size_t>{48, 64, 3}));
+    EXPECT_TRUE(same_bits(n.to_float().data(), expected.normals.data()->data(), 48 * 64 * 3));
+  }
+  // The SyntheticSequence is itself a FrameSource with the same ground truth.
+  const Trajectory a = seq.ground_truth_trajectory(), b = data.ground_truth_trajectory();
+  ASSERT_EQ(a.size(), b.size());
+  EXPECT_EQ(seq.load(2).depth.size(), 64u * 48u);
+}
+
+TEST(SyntheticWriter, RefusesANonEmptyDirectoryUnlessForced) {
+  const SyntheticSequence seq = small_sequence("none", TrajectoryKind::kRail);
+  test::TempDir dir;
+  dir.write("out/notes.txt", "mine");
+  try {
+    write_synthetic_sequence(seq, dir.file("out"));
+    ADD_FAILURE() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not empty (use --force"), std::string::npos);
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir.file("out/depth.txt")));
+  SyntheticWriterOptions force;
+  force.force = true;
+  write_synthetic_sequence(seq, dir.file("out"), force);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("out/depth.txt")));
+  EXPECT_TRUE(std::filesystem::exists(dir.file("out/notes.txt")));  // left alone
+  const std::string file = dir.write("file", "x");
+  EXPECT_THROW(write_synthetic_sequence(seq, file), InputError);
+}
+
+TEST(SyntheticWriter, StampsHaveSixDecimals) {
+  EXPECT_EQ(format_stamp(0.0), "0.000000");
+  EXPECT_EQ(format_stamp(1.0 / 30.0), "0.033333");
+  EXPECT_EQ(format_stamp(1305031102.160407), "1305031102.160407");
+}
+
+}  // namespace
+}  // namespace jpcr

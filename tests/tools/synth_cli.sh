@@ -1,0 +1,82 @@
+#!/usr/bin/env bash
+# jpcr_synth end to end: the TUM layout it writes, jpcr_eval of its ground truth against itself
+# (exactly 0), numpy reading the .npy ground truth, determinism for a seed, and bad input (one
+# clear message, the documented exit code, nothing written).
+set -uo pipefail
+build=$1 src=$2
+synth=$build/tools/jpcr_synth
+eval_bin=$build/tools/jpcr_eval
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+# shellcheck source=expect.sh
+source "$src/tests/tools/expect.sh"
+
+# A small sequence: 12 frames of the drift rig at 80x60 with range noise.
+expect 0 "wrote 12 frames" -- "$synth" --scene rail_wall --trajectory rail --frames 12 \
+  --noise range:1 --size 80x60 --seed 3 --out "$tmp/rail"
+for d in depth rgb curvature normals; do
+  n=$(ls "$tmp/rail/$d" | wc -l)
+  [ "$n" = 12 ] || { echo "FAIL: $d/ has $n files, want 12"; fail=1; }
+done
+for f in depth.txt rgb.txt groundtruth.txt camera.yaml; do
+  [ -s "$tmp/rail/$f" ] || { echo "FAIL: $f missing"; fail=1; }
+done
+ls "$tmp/rail" "$tmp/rail"/* | grep -q '\.tmp\.' && { echo "FAIL: temporary file left"; fail=1; }
+
+# Ground truth against itself is exactly 0.
+"$eval_bin" traj --gt "$tmp/rail/groundtruth.txt" --est "$tmp/rail/groundtruth.txt" --json \
+  > "$tmp/self.json" || { echo "FAIL: jpcr_eval"; fail=1; }
+if /usr/bin/python3 -c 'import numpy' 2>/dev/null; then
+  /usr/bin/python3 - "$tmp" <<'PY' || fail=1
+import json, sys, numpy as np
+t = sys.argv[1]
+r = json.load(open(t + "/self.json"))
+assert r["ate"]["translation_m"]["rmse"] == 0.0, r["ate"]
+assert r["rpe_per_frame"]["translation_m"]["rmse"] == 0.0
+assert r["relative"]["translation_rms_m"] == 0.0 and r["relative"]["pairs"] == 11
+# The rail: translation only, 10 mm per frame.
+gt = np.loadtxt(t + "/rail/groundtruth.txt")
+steps = np.linalg.norm(np.diff(gt[:, 1:4], axis=0), axis=1)
+assert np.allclose(steps, 0.01, atol=1e-12), steps
+assert np.all(gt[:, 4:] == gt[0, 4:])
+# depth.txt stamps name the files and match groundtruth.txt.
+lines = [l.split() for l in open(t + "/rail/depth.txt") if not l.startswith("#")]
+assert [l[1] for l in lines] == ["depth/%s.png" % l[0] for l in lines]
+assert np.array_equal(np.array([float(l[0]) for l in lines]), gt[:, 0])
+# numpy reads the ground truth: float32 HxWx2 curvature with k1 >= k2, unit normals.
+k = np.load(t + "/rail/curvature/%s.npy" % lines[3][0])
+n = np.load(t + "/rail/normals/%s.npy" % lines[3][0])
+assert k.dtype == np.float32 and k.shape == (60, 80, 2), (k.dtype, k.shape)
+assert n.dtype == np.float32 and n.shape == (60, 80, 3)
+ok = np.isfinite(k[..., 0])
+assert ok.mean() > 0.8 and np.all(k[ok, 0] >= k[ok, 1])
+assert np.allclose(np.linalg.norm(n.reshape(-1, 3), axis=1), 1.0, atol=1e-6)
+print("ok: eval of ground truth against itself is 0; rail steps 10 mm; numpy reads the maps")
+PY
+fi
+
+# Deterministic for a seed: a second run gives identical files.
+"$synth" --scene rail_wall --trajectory rail --frames 12 --noise range:1 --size 80x60 --seed 3 \
+  --out "$tmp/again" > /dev/null 2>&1
+if ! diff -r "$tmp/rail" "$tmp/again" > /dev/null; then echo "FAIL: not deterministic"; fail=1; fi
+
+# The camera file is usable by the other tools, and --config takes it back.
+expect 0 "wrote 2 frames" -- "$synth" --config "$tmp/rail/camera.yaml" --frames 2 --out "$tmp/cfg"
+grep -q "^width: 80$" "$tmp/cfg/camera.yaml" || { echo "FAIL: --config size not kept"; fail=1; }
+
+# Bad input.
+printf 'view: {eye: [0, 0, 1], target: [0, 1, 1]}\nsurfaces:\n  - {type: sphere, center: [0, 2, 1], radius: 0}\n' > "$tmp/bad.yaml"
+printf 'fx: 500\nfy: 500\ncx: 40\ncy: 30\nwidth: 80\nheight: 60\ndepth_scale: 5000\ndistortion: [0.1, 0, 0, 0, 0]\n' > "$tmp/distorted.yaml"
+expect 0 "usage: jpcr_synth" -- "$synth" --help
+expect 0 "room_spheres" -- "$synth" --help
+expect 2 "out is required" -- "$synth" --frames 2
+expect 2 "range:K needs a percentage" -- "$synth" --noise range:abc --out "$tmp/x"
+expect 2 "unknown trajectory 'spiral'" -- "$synth" --trajectory spiral --out "$tmp/x"
+expect 2 "WIDTHxHEIGHT" -- "$synth" --size 640 --out "$tmp/x"
+expect 2 "frames must be at least 1" -- "$synth" --frames 0 --out "$tmp/x"
+expect 1 "scene 'nosuch' not found" -- "$synth" --scene nosuch --out "$tmp/x"
+expect 1 "bad.yaml:3: key 'surfaces\[0\].radius': must be positive" -- "$synth" --scene "$tmp/bad.yaml" --out "$tmp/x"
+expect 1 "distortion must be zero" -- "$synth" --config "$tmp/distorted.yaml" --frames 1 --out "$tmp/x"
+expect 1 "not empty (use --force" -- "$synth" --frames 1 --size 80x60 --out "$tmp/rail"
+[ -e "$tmp/x" ] && { echo "FAIL: output written after an error"; fail=1; }
+expect 0 "wrote 1 frames" -- "$synth" --frames 1 --size 80x60 --out "$tmp/rail" --force
+exit $fail
