@@ -1,0 +1,160 @@
+#include "jpcr/frontend/frame_pyramid.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "jpcr/quadric/error.hpp"
+
+namespace jpcr {
+
+namespace {
+
+std::size_t count_valid(const VertexMap& vertices) {
+  std::size_t n = 0;
+  for (const Eigen::Vector3f& x : vertices)
+    n += is_valid(x) ? 1 : 0;
+  return n;
+}
+
+// Depth in metres with every non-measurement as 0 and the working range applied.
+DepthImage clean_depth(const DepthImage& depth, const PreprocessParams& p) {
+  DepthImage out(depth.width(), depth.height(), 0.0f);
+  for (std::size_t i = 0; i < depth.size(); ++i) {
+    const float z = depth[i];
+    if (is_valid_depth(z) && z >= p.min_depth && z <= p.max_depth) out[i] = z;
+  }
+  return out;
+}
+
+}  // namespace
+
+DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& p) {
+  const int r = p.bilateral_radius, w = depth.width(), h = depth.height();
+  // Spatial weights once; the range weight exp(−Δz²/2σ²) from a table over |Δz| in [0, 3σ).
+  std::vector<float> spatial((2 * r + 1) * (2 * r + 1));
+  for (int dv = -r; dv <= r; ++dv)
+    for (int du = -r; du <= r; ++du)
+      spatial[(dv + r) * (2 * r + 1) + du + r] = std::exp(
+          -(du * du + dv * dv) / (2.0f * p.bilateral_sigma_space * p.bilateral_sigma_space));
+  constexpr int kTable = 256;
+  std::array<float, kTable> range;
+  const float cutoff = 3.0f * p.bilateral_sigma_depth, to_bin = kTable / cutoff;
+  for (int i = 0; i < kTable; ++i) {
+    const float d = (i + 0.5f) / to_bin / p.bilateral_sigma_depth;
+    range[i] = std::exp(-0.5f * d * d);
+  }
+  DepthImage out(w, h, 0.0f);
+#pragma omp parallel for schedule(static)
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const float z = depth(u, v);
+      if (z <= 0.0f) continue;
+      float sum = 0.0f, weight = 0.0f;
+      for (int dv = std::max(-r, -v); dv <= std::min(r, h - 1 - v); ++dv) {
+        const float* row = &depth(0, v + dv);
+        const float* ws = &spatial[(dv + r) * (2 * r + 1) + r];
+        for (int du = std::max(-r, -u); du <= std::min(r, w - 1 - u); ++du) {
+          const float zi = row[u + du];
+          const float d = std::abs(zi - z);
+          if (zi <= 0.0f || d >= cutoff) continue;
+          const float wi = ws[du] * range[static_cast<int>(d * to_bin)];
+          sum += wi * zi;
+          weight += wi;
+        }
+      }
+      out(u, v) = sum / weight;  // weight ≥ the centre's own weight > 0
+    }
+  }
+  return out;
+}
+
+DepthImage downsample_depth(const DepthImage& depth, float max_depth_step) {
+  DepthImage out(depth.width() / 2, depth.height() / 2, 0.0f);
+#pragma omp parallel for schedule(static)
+  for (int v = 0; v < out.height(); ++v) {
+    for (int u = 0; u < out.width(); ++u) {
+      const float z[4] = {depth(2 * u, 2 * v), depth(2 * u + 1, 2 * v), depth(2 * u, 2 * v + 1),
+                          depth(2 * u + 1, 2 * v + 1)};
+      float nearest = 0.0f;
+      for (float zi : z)
+        if (zi > 0.0f && (nearest == 0.0f || zi < nearest)) nearest = zi;
+      if (nearest == 0.0f) continue;
+      float sum = 0.0f;
+      int n = 0;
+      for (float zi : z) {
+        if (zi > 0.0f && zi - nearest <= max_depth_step) {
+          sum += zi;
+          ++n;
+        }
+      }
+      out(u, v) = sum / static_cast<float>(n);
+    }
+  }
+  return out;
+}
+
+NormalMap compute_normal_map(const VertexMap& vertices, int offset, float max_jump) {
+  const int w = vertices.width(), h = vertices.height(), k = offset;
+  NormalMap normals(w, h, invalid_vector());
+  const float jump = max_jump * static_cast<float>(2 * k);
+#pragma omp parallel for schedule(static)
+  for (int v = k; v < h - k; ++v) {
+    for (int u = k; u < w - k; ++u) {
+      const Eigen::Vector3f& x = vertices(u, v);
+      if (!is_valid(x)) continue;
+      const Eigen::Vector3f& l = vertices(u - k, v);
+      const Eigen::Vector3f& r = vertices(u + k, v);
+      const Eigen::Vector3f& t = vertices(u, v - k);
+      const Eigen::Vector3f& b = vertices(u, v + k);
+      if (!is_valid(l) || !is_valid(r) || !is_valid(t) || !is_valid(b)) continue;
+      const Eigen::Vector3f du = r - l, dv = b - t;
+      const float limit = jump * x.z();
+      if (std::abs(du.z()) > limit || std::abs(dv.z()) > limit) continue;
+      Eigen::Vector3f n = du.cross(dv);
+      const float norm = n.norm();
+      if (!(norm > 0.0f)) continue;
+      n /= norm;
+      if (n.dot(x) > 0.0f) n = -n;  // toward the camera (method.md §1)
+      normals(u, v) = n;
+    }
+  }
+  return normals;
+}
+
+FramePyramid preprocess(const Frame& frame, const PreprocessParams& params) {
+  try {
+    frame.camera.validate();
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("frame camera: ") + e.what());
+  }
+  if (frame.depth.width() != frame.camera.width || frame.depth.height() != frame.camera.height) {
+    throw InputError("frame at t = " + std::to_string(frame.timestamp) + ": depth image is " +
+                     std::to_string(frame.depth.width()) + "x" +
+                     std::to_string(frame.depth.height()) + " but the camera is " +
+                     std::to_string(frame.camera.width) + "x" +
+                     std::to_string(frame.camera.height));
+  }
+  if (frame.camera.width < 32 || frame.camera.height < 32) {
+    throw InputError("frame: images smaller than 32x32 are too small for a 3-level pyramid");
+  }
+  FramePyramid pyramid;
+  pyramid.timestamp = frame.timestamp;
+  pyramid.levels.resize(FramePyramid::kLevels);
+  DepthImage depth = clean_depth(frame.depth, params);
+  if (params.bilateral) depth = bilateral_filter(depth, params);
+  for (int l = 0; l < FramePyramid::kLevels; ++l) {
+    PyramidLevel& level = pyramid.levels[l];
+    level.camera = frame.camera.pyramid_level(l);
+    level.depth =
+        l == 0 ? std::move(depth)
+               : downsample_depth(pyramid.levels[l - 1].depth, params.pyramid_max_depth_step);
+    level.vertices = compute_vertex_map(level.depth, level.camera);
+    level.normals = compute_normal_map(level.vertices, l == 0 ? params.normal_offset : 1,
+                                       params.normal_max_jump);
+    level.valid_vertices = count_valid(level.vertices);
+  }
+  return pyramid;
+}
+
+}  // namespace jpcr

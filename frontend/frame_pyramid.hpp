@@ -1,0 +1,44 @@
+// Preprocessing for the front end: optional bilateral filter of the depth, a 3-level pyramid
+// (2x2 block averages that do not cross depth edges), and a vertex and normal map per level
+// (method.md §1: normals point toward the camera).
+#pragma once
+
+#include <vector>
+
+#include "jpcr/frontend/frontend_params.hpp"
+#include "jpcr/quadric/frame.hpp"
+#include "jpcr/quadric/vertex_map.hpp"
+
+namespace jpcr {
+
+/// One level of the pyramid: the camera at that resolution and its maps (camera frame).
+struct PyramidLevel {
+  CameraIntrinsics camera;
+  DepthImage depth;  // m, 0 where there is no measurement
+  VertexMap vertices;
+  NormalMap normals;  // unit, n·X < 0; NaN at edges and where the vertex is missing
+  std::size_t valid_vertices = 0;
+};
+
+struct FramePyramid {
+  static constexpr int kLevels = 3;
+  double timestamp = 0.0;
+  std::vector<PyramidLevel> levels;  // levels[0] is full resolution, each next one half the size
+};
+
+/// Throws InputError when the depth image size differs from the camera's, or the camera is
+/// invalid. NaN, Inf and negative depths read as "no measurement".
+FramePyramid preprocess(const Frame& frame, const PreprocessParams& params = {});
+
+/// Edge-preserving smoothing of depth (m); pixels without depth stay without depth.
+DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& params);
+
+/// Half-size depth: each pixel averages the valid depths of its 2x2 block that lie within
+/// max_depth_step of the block's nearest depth.
+DepthImage downsample_depth(const DepthImage& depth, float max_depth_step);
+
+/// Normals from central differences at ±offset pixels; NaN where a neighbour is missing or a
+/// difference is longer than max_jump × z × offset (a depth edge).
+NormalMap compute_normal_map(const VertexMap& vertices, int offset, float max_jump);
+
+}  // namespace jpcr

@@ -1,0 +1,92 @@
+// Tunables of the front end (ICP-ftf, method.md §5): preprocessing, point-to-plane ICP and the
+// keyframe tracker. Plain structs with in-class defaults and units; YAML maps onto them in io/
+// (section `frontend:` of configs/default.yaml).
+#pragma once
+
+#include <array>
+#include <string>
+
+namespace jpcr {
+
+/// Depth preprocessing and the 3-level pyramid (frame_pyramid.hpp).
+struct PreprocessParams {
+  float min_depth = 0.3f;    // m, nearer depth values are dropped
+  float max_depth = 4.0f;    // m, farther depth values are dropped
+  bool bilateral = false;    // bilateral filter of the full-resolution depth before everything else
+  int bilateral_radius = 2;  // px, half-width of the filter window
+  float bilateral_sigma_space = 1.5f;   // px
+  float bilateral_sigma_depth = 0.02f;  // m
+  /// A 2x2 block is averaged into the next level only over depths within this distance of the
+  /// block's nearest depth (depth edges are not blurred).
+  float pyramid_max_depth_step = 0.05f;  // m
+  /// Normals are the cross product of central differences at ±normal_offset pixels (level 0;
+  /// coarser levels use ±1). A difference longer than normal_max_jump × z marks a depth edge,
+  /// where no normal is computed.
+  int normal_offset = 1;          // px
+  float normal_max_jump = 0.08f;  // fraction of z per pixel of offset
+
+  /// Throws InputError "field: problem" for the first invalid field.
+  void validate() const;
+};
+
+enum class RobustLoss { none, huber, tukey };
+
+/// Dense projective point-to-plane ICP (point_to_plane_icp.hpp).
+struct IcpParams {
+  /// Gauss-Newton iterations per pyramid level, finest (640x480) first. Coarse to fine: level 2
+  /// is solved first. 0 skips a level.
+  std::array<int, 3> iterations{4, 5, 8};
+  int level0_stride = 2;           // px, use every n-th pixel in u and v at the finest level
+  float max_distance = 0.1f;       // m, pairs farther apart than this are rejected
+  float max_normal_angle = 30.0f;  // deg, pairs whose normals disagree more are rejected
+  RobustLoss robust_loss = RobustLoss::huber;
+  float robust_scale = 0.01f;          // m, Huber's δ or Tukey's c on the point-to-plane residual
+  float min_step_translation = 1e-5f;  // m, stop a level when the update is smaller ...
+  float min_step_rotation = 1e-4f;     // deg, ... in both translation and rotation
+  /// Relative Levenberg damping added to the diagonal of JᵀWJ, which keeps degenerate
+  /// directions (a plane) from drifting.
+  double damping = 1e-6;
+  // Verdicts (IcpVerdict).
+  int min_inliers = 1000;  // pairs at the finest level used; coarser levels need 1/4 per level
+  double min_inlier_ratio = 0.25;      // inliers / valid source points, else `diverged`
+  double degeneracy_threshold = 1e-3;  // λmin/λmax of the unit-free JᵀWJ below this: degenerate
+  double max_translation = 0.3;  // m, a larger motion away from the initial guess is `diverged`
+  double max_rotation = 30.0;    // deg, likewise
+
+  void validate() const;
+};
+
+enum class TrackingMode { frame_to_frame, frame_to_keyframe };
+enum class MotionPrior { identity, constant_velocity };
+
+/// Keyframe tracker (keyframe_tracker.hpp).
+struct TrackerParams {
+  TrackingMode mode = TrackingMode::frame_to_frame;
+  MotionPrior motion_prior = MotionPrior::identity;  // initial guess of each alignment
+  /// A frame becomes a keyframe when it is this far from the current keyframe ...
+  double keyframe_translation = 0.10;  // m
+  double keyframe_rotation = 10.0;     // deg
+  /// ... or when fewer than this fraction of its valid points pair with the keyframe.
+  double keyframe_overlap = 0.6;
+  bool accept_degenerate = false;  // use a `degenerate` ICP result as if it were `ok`
+
+  void validate() const;
+};
+
+struct FrontendParams {
+  PreprocessParams preprocess;
+  IcpParams icp;
+  TrackerParams tracker;
+
+  void validate() const;
+};
+
+const char* to_string(RobustLoss loss);
+const char* to_string(TrackingMode mode);
+const char* to_string(MotionPrior prior);
+/// Throw InputError listing the choices on an unknown name.
+RobustLoss parse_robust_loss(const std::string& name);
+TrackingMode parse_tracking_mode(const std::string& name);
+MotionPrior parse_motion_prior(const std::string& name);
+
+}  // namespace jpcr

@@ -1,0 +1,69 @@
+// The front end's tracker: ICP-ftf against the previous frame (the paper's baseline) or against
+// the current keyframe, with a keyframe policy (translation, rotation, overlap) that selects the
+// frames the back end refines. A failed alignment never moves the camera silently: the tracker
+// extrapolates the last good motion and says so (TrackResult::kept_last_motion).
+//
+//   KeyframeTracker tracker(params.frontend);
+//   for (...) {
+//     TrackResult r = tracker.track(frame);   // r.T_wc: camera-to-world (method.md §1)
+//     if (r.is_keyframe) backend.add(tracker.keyframe());
+//   }
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "jpcr/frontend/frame_pyramid.hpp"
+#include "jpcr/frontend/point_to_plane_icp.hpp"
+
+namespace jpcr {
+
+/// A frame the back end works on: the frame, its pose and its preprocessed maps.
+struct Keyframe {
+  int index = -1;  // position of the frame in the tracked sequence (0-based)
+  Frame frame;
+  StampedPose T_wc;
+  std::shared_ptr<const FramePyramid> pyramid;
+};
+
+struct TrackResult {
+  int index = 0;       // position of the frame in the tracked sequence (0-based)
+  int reference = -1;  // index of the frame it was aligned to; −1 for the first frame
+  StampedPose T_wc;    // camera-to-world estimate
+  IcpResult icp;       // the alignment (default-constructed for the first frame)
+  bool is_keyframe = false;
+  bool kept_last_motion = false;  // the alignment failed; T_wc extrapolates the last good motion
+  double overlap = 1.0;           // fraction of the frame's points that pair with the keyframe
+  double preprocess_ms = 0.0;
+  double icp_ms = 0.0;
+};
+
+class KeyframeTracker {
+ public:
+  /// `initial_pose` is the camera-to-world pose of the first frame (the gauge, method.md §1).
+  explicit KeyframeTracker(const FrontendParams& params = {},
+                           const Eigen::Isometry3d& initial_pose = Eigen::Isometry3d::Identity());
+
+  /// Tracks the next frame. Throws InputError when the frame's size differs from the camera's.
+  TrackResult track(const Frame& frame);
+
+  bool has_keyframe() const { return keyframe_.pyramid != nullptr; }
+  /// The current keyframe; throws std::logic_error before the first frame.
+  const Keyframe& keyframe() const;
+  const std::vector<int>& keyframe_indices() const { return keyframe_indices_; }
+  const FrontendParams& params() const { return params_; }
+
+ private:
+  bool is_good(const IcpResult& icp) const;
+
+  FrontendParams params_;
+  Eigen::Isometry3d initial_pose_;
+  int frames_ = 0;
+  Keyframe keyframe_;
+  std::vector<int> keyframe_indices_;
+  std::shared_ptr<const FramePyramid> previous_;
+  Eigen::Isometry3d previous_pose_ = Eigen::Isometry3d::Identity();
+  Eigen::Isometry3d last_good_motion_ = Eigen::Isometry3d::Identity();  // T_prev,cur
+};
+
+}  // namespace jpcr

@@ -1,0 +1,203 @@
+#include "jpcr/frontend/point_to_plane_icp.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "jpcr/frontend/point_to_plane_residual.hpp"
+
+namespace jpcr {
+
+namespace {
+
+constexpr double kDegToRad = M_PI / 180.0;
+
+// Source pixels visited at a level with the given stride.
+double samples(const PyramidLevel& level, int stride) {
+  return std::ceil(level.camera.width / static_cast<double>(stride)) *
+         std::ceil(level.camera.height / static_cast<double>(stride));
+}
+
+// Final statistics of an alignment from its last normal equations.
+void describe(const NormalEquations& eq, IcpResult& r) {
+  r.inliers = eq.inliers;
+  r.inlier_ratio = eq.valid > 0 ? static_cast<double>(eq.inliers) / eq.valid : 0.0;
+  r.rms = eq.inliers > 0 ? std::sqrt(eq.sum_squares / eq.inliers) : 0.0;
+  const Matrix6d H = eq.hessian();
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H);
+  r.eigenvalues = eig.eigenvalues();
+  // Unit-free conditioning: ω columns divided by the RMS lever arm (trace ratio of the blocks).
+  const double trans = H.topLeftCorner<3, 3>().trace(), rot = H.bottomRightCorner<3, 3>().trace();
+  if (trans > 0.0 && rot > 0.0) {
+    Vector6d d = Vector6d::Ones();
+    d.tail<3>().setConstant(std::sqrt(trans / rot));
+    const Eigen::SelfAdjointEigenSolver<Matrix6d> scaled(d.asDiagonal() * H * d.asDiagonal(),
+                                                         Eigen::EigenvaluesOnly);
+    const Vector6d l = scaled.eigenvalues();
+    r.degeneracy = l[5] > 0.0 ? std::max(l[0], 0.0) / l[5] : 0.0;
+  }
+  const double lmax = std::max(r.eigenvalues[5], 1e-300);
+  const Vector6d inv = r.eigenvalues.cwiseMax(1e-12 * lmax).cwiseInverse();
+  const double dof = std::max(eq.sum_weights - 6.0, 1.0);
+  r.covariance =
+      (eq.cost / dof) * eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
+}
+
+bool is_finite(const Eigen::Isometry3d& T) {
+  return T.matrix().allFinite();
+}
+
+}  // namespace
+
+const char* to_string(IcpVerdict verdict) {
+  switch (verdict) {
+    case IcpVerdict::ok:
+      return "ok";
+    case IcpVerdict::degenerate:
+      return "degenerate";
+    case IcpVerdict::diverged:
+      return "diverged";
+    case IcpVerdict::too_few_points:
+      return "too_few_points";
+  }
+  return "?";
+}
+
+float robust_weight(float e, RobustLoss loss, float scale) {
+  const float a = std::abs(e);
+  switch (loss) {
+    case RobustLoss::none:
+      return 1.0f;
+    case RobustLoss::huber:
+      return a <= scale ? 1.0f : scale / a;
+    case RobustLoss::tukey: {
+      if (a >= scale) return 0.0f;
+      const float t = 1.0f - (e / scale) * (e / scale);
+      return t * t;
+    }
+  }
+  return 1.0f;
+}
+
+NormalEquations linearize_point_to_plane(const PyramidLevel& source, const PyramidLevel& target,
+                                         const Eigen::Isometry3d& T, const IcpParams& params,
+                                         int stride) {
+  const Eigen::Matrix3f R = T.linear().cast<float>();
+  const Eigen::Vector3f t = T.translation().cast<float>();
+  const CameraIntrinsics& c = target.camera;
+  const float fx = static_cast<float>(c.fx), fy = static_cast<float>(c.fy);
+  const float cx = static_cast<float>(c.cx), cy = static_cast<float>(c.cy);
+  const int tw = target.vertices.width(), th = target.vertices.height();
+  const float max_d2 = params.max_distance * params.max_distance;
+  const float min_cos = std::cos(params.max_normal_angle * static_cast<float>(kDegToRad));
+  const RobustLoss loss = params.robust_loss;
+  const float scale = params.robust_scale;
+  const int sw = source.vertices.width(), sh = source.vertices.height();
+  NormalEquations total;
+#pragma omp parallel
+  {
+    NormalEquations local;
+#pragma omp for schedule(static) nowait
+    for (int v = 0; v < sh; v += stride) {
+      for (int u = 0; u < sw; u += stride) {
+        const Eigen::Vector3f& X = source.vertices(u, v);
+        if (!is_valid(X)) continue;
+        ++local.valid;
+        const Eigen::Vector3f& ns = source.normals(u, v);
+        if (!is_valid(ns)) continue;
+        // Projective association (method.md §5): p = T X, projected into the target.
+        const Eigen::Vector3f p = R * X + t;
+        if (p.z() <= 0.0f) continue;
+        const int ut = static_cast<int>(std::lround(fx * p.x() / p.z() + cx));
+        const int vt = static_cast<int>(std::lround(fy * p.y() / p.z() + cy));
+        if (ut < 0 || vt < 0 || ut >= tw || vt >= th) continue;
+        const Eigen::Vector3f& n = target.normals(ut, vt);
+        if (!is_valid(n)) continue;
+        const Eigen::Vector3f& q = target.vertices(ut, vt);
+        // Rejection: distance and normal angle.
+        if ((p - q).squaredNorm() > max_d2) continue;
+        if ((R * ns).dot(n) < min_cos) continue;
+        const float e = PointToPlaneResidual<float>::error(p, q, n);
+        const float w = robust_weight(e, loss, scale);
+        if (w <= 0.0f) continue;
+        local.add(PointToPlaneResidual<float>::jacobian(p, n), e, w);
+      }
+    }
+#pragma omp critical(jpcr_icp_reduce)
+    total += local;
+  }
+  return total;
+}
+
+IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& target,
+                               const Eigen::Isometry3d& initial, const IcpParams& params) {
+  IcpResult result;
+  result.pose = initial;
+  const int levels = std::min<int>(source.levels.size(), target.levels.size());
+  // The coarsest level that runs sets the scale of min_inliers.
+  int coarsest = -1;
+  for (int l = levels - 1; l >= 0 && coarsest < 0; --l)
+    if (params.iterations[l] > 0) coarsest = l;
+  if (coarsest < 0) return result;
+  const auto stride_of = [&](int l) { return l == 0 ? params.level0_stride : 1; };
+  const double base = samples(source.levels[coarsest], stride_of(coarsest));
+
+  Eigen::Isometry3d T = initial;
+  NormalEquations last;
+  bool have_system = false;
+  for (int l = coarsest; l >= 0; --l) {
+    const int iterations = params.iterations[l];
+    if (iterations <= 0) continue;
+    const int stride = stride_of(l);
+    const double needed = params.min_inliers * samples(source.levels[l], stride) / base;
+    result.converged = false;
+    for (int it = 0; it < iterations; ++it) {
+      const NormalEquations eq =
+          linearize_point_to_plane(source.levels[l], target.levels[l], T, params, stride);
+      last = eq;
+      have_system = true;
+      if (static_cast<double>(eq.inliers) < needed) {
+        describe(eq, result);
+        result.pose = initial;
+        result.verdict = IcpVerdict::too_few_points;
+        return result;
+      }
+      // Gauss-Newton with a little Levenberg damping: (H + λI) ξ = −b (method.md §10: the
+      // minus sign the paper lacks).
+      Matrix6d H = eq.hessian();
+      H.diagonal().array() += params.damping * H.trace() / 6.0;
+      const Vector6d xi = H.ldlt().solve(-eq.gradient());
+      ++result.iterations;
+      if (!xi.allFinite()) {
+        describe(eq, result);
+        result.verdict = IcpVerdict::diverged;
+        return result;
+      }
+      T = se3_exp(xi) * T;
+      T.linear() = orthonormalize(T.linear());
+      if (xi.head<3>().norm() < params.min_step_translation &&
+          xi.tail<3>().norm() < params.min_step_rotation * kDegToRad) {
+        result.converged = true;
+        break;
+      }
+    }
+  }
+  if (have_system) describe(last, result);
+  result.pose = T;
+  const Eigen::Isometry3d motion = initial.inverse() * T;
+  if (!is_finite(T) || motion.translation().norm() > params.max_translation ||
+      rotation_angle(motion.linear()) > params.max_rotation * kDegToRad) {
+    result.verdict = IcpVerdict::diverged;
+  } else if (result.inlier_ratio < params.min_inlier_ratio) {
+    result.verdict = IcpVerdict::too_few_points;
+  } else if (result.degeneracy < params.degeneracy_threshold) {
+    result.verdict = IcpVerdict::degenerate;
+  } else {
+    result.verdict = IcpVerdict::ok;
+  }
+  return result;
+}
+
+}  // namespace jpcr

@@ -1,0 +1,62 @@
+// ICP-ftf (method.md §5): dense projective point-to-plane ICP between two frame pyramids, coarse
+// to fine, with robust weights and Gauss-Newton steps T ← exp(ξ^) T solved with LDLT.
+//
+//   FramePyramid source = preprocess(frame_j), target = preprocess(frame_i);
+//   IcpResult r = align_point_to_plane(source, target, Eigen::Isometry3d::Identity());
+//   if (r.verdict == IcpVerdict::ok) T_wc_j = T_wc_i * r.pose;
+//
+// The pose maps source-frame points into the target frame (method.md §1), so for consecutive
+// frames it is the motion of the camera from the target to the source frame.
+#pragma once
+
+#include "jpcr/frontend/frame_pyramid.hpp"
+#include "jpcr/frontend/normal_equations.hpp"
+#include "jpcr/quadric/se3.hpp"
+
+namespace jpcr {
+
+/// Whether a result can be trusted:
+///  - ok:             converged on enough pairs, well constrained;
+///  - degenerate:     the smallest eigenvalue of the unit-free JᵀWJ is tiny against the largest
+///                    (a plane, a corridor): some direction of motion is not observed;
+///  - diverged:       the estimate is not finite or moved farther from the initial guess than
+///                    max_translation / max_rotation;
+///  - too_few_points: a level had fewer pairs than min_inliers (scaled), or too small a fraction
+///                    of the source points found a partner (no overlap).
+enum class IcpVerdict { ok, degenerate, diverged, too_few_points };
+
+const char* to_string(IcpVerdict verdict);
+
+struct IcpResult {
+  Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // T: source frame → target frame
+  int iterations = 0;         // Gauss-Newton iterations over all levels
+  bool converged = false;     // the last level stopped on a small step, not on its iteration cap
+  double rms = 0.0;           // m, RMS point-to-plane residual of the final pairs
+  double inlier_ratio = 0.0;  // final pairs / valid source points considered
+  std::size_t inliers = 0;    // final pairs
+  /// Eigenvalues of JᵀWJ at the final linearisation, ascending (ξ = (v, ω): m⁰ and m² blocks).
+  Vector6d eigenvalues = Vector6d::Zero();
+  /// λmin / λmax of JᵀWJ made unit-free: the ω columns are divided by the RMS lever arm
+  /// √(Σ w |p × n|² / Σ w). 1 is perfectly conditioned, 0 unobservable.
+  double degeneracy = 0.0;
+  /// σ² (JᵀWJ)⁻¹ for ξ in the target frame (left perturbation), σ² = Σ w e² / (Σ w − 6).
+  /// Eigenvalues below 1e-12 λmax are clamped, so unobserved directions read as huge, not Inf.
+  Matrix6d covariance = Matrix6d::Identity();
+  IcpVerdict verdict = IcpVerdict::too_few_points;
+};
+
+/// Aligns `source` to `target` starting from `initial` (source → target).
+IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& target,
+                               const Eigen::Isometry3d& initial, const IcpParams& params = {});
+
+/// One pass of association and reduction at one level: every stride-th source pixel is mapped
+/// with T, projected into the target, paired with the target vertex and normal there, rejected
+/// by distance and normal angle, weighted, and added to the normal equations (parallel).
+NormalEquations linearize_point_to_plane(const PyramidLevel& source, const PyramidLevel& target,
+                                         const Eigen::Isometry3d& T, const IcpParams& params,
+                                         int stride = 1);
+
+/// Robust weight of a residual e (m) for params.robust_loss and robust_scale.
+float robust_weight(float e, RobustLoss loss, float scale);
+
+}  // namespace jpcr

@@ -1,0 +1,115 @@
+// Preprocessing: pyramid sizes and cameras, exact normals of a plane, depth edges kept by the
+// downsampling and the bilateral filter, the working range, and bad input.
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "jpcr/frontend/frame_pyramid.hpp"
+#include "jpcr/quadric/error.hpp"
+#include "synthetic_views.hpp"
+
+namespace jpcr {
+namespace {
+
+// A frontal-ish wall seen obliquely: the plane y = 2 in the world.
+SyntheticScene wall() {
+  SyntheticScene scene;
+  scene.surfaces = {Plane{Eigen::Vector3d(0, 2, 0), Eigen::Vector3d(0, -1, 0)}};
+  return scene;
+}
+
+TEST(FramePyramid, ThreeLevelsHalvingTheCamera) {
+  const Eigen::Isometry3d T_wc = test::look_from({0, 0, 1}, {0.5, 2, 1.2});
+  const FramePyramid p = preprocess(test::render_at(wall(), T_wc));
+  ASSERT_EQ(p.levels.size(), 3u);
+  const int widths[] = {640, 320, 160}, heights[] = {480, 240, 120};
+  for (int l = 0; l < 3; ++l) {
+    EXPECT_EQ(p.levels[l].vertices.width(), widths[l]);
+    EXPECT_EQ(p.levels[l].normals.height(), heights[l]);
+    EXPECT_EQ(p.levels[l].camera.width, widths[l]);
+    EXPECT_GT(p.levels[l].valid_vertices, static_cast<std::size_t>(0.95 * widths[l] * heights[l]));
+  }
+  EXPECT_DOUBLE_EQ(p.levels[2].camera.fx, synthetic_camera().fx / 4.0);
+}
+
+TEST(FramePyramid, NormalsOfAPlaneAreExactAndFaceTheCamera) {
+  const Eigen::Isometry3d T_wc = test::look_from({0, 0, 1}, {0.5, 2, 1.2});
+  const Eigen::Vector3f expected =
+      (T_wc.linear().transpose() * Eigen::Vector3d(0, -1, 0)).cast<float>();
+  const FramePyramid p = preprocess(test::render_at(wall(), T_wc));
+  for (int l = 0; l < 3; ++l) {
+    const PyramidLevel& level = p.levels[l];
+    int checked = 0;
+    for (int v = 2; v < level.normals.height() - 2; ++v) {
+      for (int u = 2; u < level.normals.width() - 2; ++u) {
+        const Eigen::Vector3f& n = level.normals(u, v);
+        ASSERT_TRUE(is_valid(n)) << "level " << l << " pixel " << u << "," << v;
+        // Float vertices of a plane: the cross product is exact to ~1e-4 rad at the coarsest.
+        EXPECT_LT((n - expected).norm(), 2e-4f);
+        EXPECT_LT(n.dot(level.vertices(u, v)), 0.0f);
+        ++checked;
+      }
+    }
+    EXPECT_GT(checked, 1000);
+  }
+}
+
+TEST(FramePyramid, DownsamplingDoesNotAverageAcrossADepthEdge) {
+  DepthImage d(4, 2, 1.0f);
+  d(1, 0) = 2.0f;  // block (0, 0): 1, 2, 1, 1 → the near surface only
+  d(2, 0) = 0.0f;  // block (1, 0): no depth at one pixel
+  d(3, 0) = 1.02f;
+  const DepthImage half = downsample_depth(d, 0.05f);
+  EXPECT_FLOAT_EQ(half(0, 0), 1.0f);
+  EXPECT_FLOAT_EQ(half(1, 0), (1.02f + 1.0f + 1.0f) / 3.0f);
+}
+
+TEST(FramePyramid, BilateralFilterKeepsStepsAndHolesAndSmoothsNoise) {
+  PreprocessParams p;
+  DepthImage d(20, 20, 1.0f);
+  for (int v = 0; v < 20; ++v)
+    for (int u = 10; u < 20; ++u)
+      d(u, v) = 1.5f;  // a 0.5 m step: far beyond 3 σ_depth
+  d(5, 5) = 0.0f;
+  d(3, 12) = 1.004f;  // a bump of 4 mm on the near side
+  const DepthImage f = bilateral_filter(d, p);
+  EXPECT_FLOAT_EQ(f(9, 3), 1.0f);
+  EXPECT_FLOAT_EQ(f(10, 3), 1.5f);
+  EXPECT_EQ(f(5, 5), 0.0f);
+  EXPECT_LT(f(3, 12), 1.002f);
+  EXPECT_GT(f(3, 12), 1.0f);
+}
+
+TEST(FramePyramid, WorkingRangeAndNonMeasurements) {
+  Frame frame;
+  frame.camera = synthetic_camera(64, 48);
+  frame.depth = DepthImage(64, 48, 1.0f);
+  frame.depth(10, 10) = std::numeric_limits<float>::quiet_NaN();
+  frame.depth(11, 10) = -1.0f;
+  frame.depth(12, 10) = std::numeric_limits<float>::infinity();
+  frame.depth(13, 10) = 0.1f;  // nearer than min_depth
+  frame.depth(14, 10) = 9.0f;  // farther than max_depth
+  const FramePyramid p = preprocess(frame);
+  for (int u = 10; u <= 14; ++u)
+    EXPECT_FALSE(is_valid(p.levels[0].vertices(u, 10))) << u;
+  EXPECT_TRUE(is_valid(p.levels[0].vertices(15, 10)));
+  EXPECT_EQ(p.levels[0].valid_vertices, 64u * 48u - 5u);
+}
+
+TEST(FramePyramid, WrongImageSizeIsAClearError) {
+  Frame frame;
+  frame.camera = synthetic_camera(64, 48);
+  frame.depth = DepthImage(32, 48, 1.0f);
+  try {
+    preprocess(frame);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("depth image is 32x48 but the camera is 64x48"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+}  // namespace
+}  // namespace jpcr

@@ -1,0 +1,107 @@
+// The tracker: ICP-ftf along the synthetic drift rig (rail, 10 mm per frame, noise-free), the
+// keyframe policy, and a failed frame that keeps the last good motion and says so.
+#include <gtest/gtest.h>
+
+#include "jpcr/frontend/keyframe_tracker.hpp"
+#include "jpcr/io/synthetic_sequence.hpp"
+#include "jpcr/io/trajectory_metrics.hpp"
+#include "jpcr/quadric/error.hpp"
+#include "synthetic_views.hpp"
+
+namespace jpcr {
+namespace {
+
+SyntheticSequence rail(int frames) {
+  SyntheticSequenceOptions options;
+  options.scene = "rail_wall";
+  options.trajectory = TrajectoryKind::kRail;
+  options.frames = frames;
+  return make_synthetic_sequence(options);
+}
+
+Trajectory track_all(const FrameSource& source, KeyframeTracker& tracker,
+                     std::vector<TrackResult>* results = nullptr) {
+  Trajectory estimate;
+  for (std::size_t i = 0; i < source.size(); ++i) {
+    TrackResult r = tracker.track(source.load(i));
+    estimate.push_back(r.T_wc);
+    if (results) results->push_back(r);
+  }
+  return estimate;
+}
+
+TEST(KeyframeTracker, RailAtZeroNoiseHasSubMillimetreRpe) {
+  // The goal: RPE per frame < 0.5 mm on the noise-free rail.
+  const SyntheticSequence seq = rail(16);
+  const Trajectory gt = seq.ground_truth_trajectory();
+  for (TrackingMode mode : {TrackingMode::frame_to_frame, TrackingMode::frame_to_keyframe}) {
+    FrontendParams params;
+    params.tracker.mode = mode;
+    KeyframeTracker tracker(params, gt.front().pose);
+    std::vector<TrackResult> results;
+    const Trajectory est = track_all(seq, tracker, &results);
+    for (const TrackResult& r : results) {
+      if (r.index == 0) continue;
+      EXPECT_EQ(r.icp.verdict, IcpVerdict::ok) << to_string(mode) << " frame " << r.index;
+      EXPECT_FALSE(r.kept_last_motion);
+    }
+    const RpeResult rpe = compute_rpe(gt, est, 1.0, DeltaUnit::kFrames);
+    EXPECT_LT(rpe.translation.rmse, 0.5e-3) << to_string(mode);
+    EXPECT_LT(rpe.rotation.rmse, 0.05) << to_string(mode);  // deg
+    RecordProperty(std::string("rpe_mm_") + to_string(mode),
+                   std::to_string(rpe.translation.rmse * 1e3));
+    std::printf("%s: RPE per frame %.4f mm, %.5f deg\n", to_string(mode),
+                rpe.translation.rmse * 1e3, rpe.rotation.rmse);
+  }
+}
+
+TEST(KeyframeTracker, KeyframesFollowTheTranslationThreshold) {
+  const SyntheticSequence seq = rail(16);
+  FrontendParams params;
+  params.tracker.keyframe_translation = 0.045;  // m: the rail moves 10 mm per frame
+  params.tracker.keyframe_overlap = 0.0;
+  KeyframeTracker tracker(params, seq.ground_truth(0).value());
+  track_all(seq, tracker);
+  EXPECT_EQ(tracker.keyframe_indices(), (std::vector<int>{0, 5, 10, 15}));
+  EXPECT_EQ(tracker.keyframe().index, 15);
+  EXPECT_NEAR(tracker.keyframe().T_wc.timestamp, seq.timestamp(15), 1e-9);
+  EXPECT_EQ(tracker.keyframe().pyramid->levels.size(), 3u);
+}
+
+TEST(KeyframeTracker, AFailedFrameKeepsTheLastGoodMotion) {
+  const SyntheticSequence seq = rail(5);
+  KeyframeTracker tracker(FrontendParams{}, seq.ground_truth(0).value());
+  std::vector<TrackResult> results;
+  for (std::size_t i = 0; i < 5; ++i) {
+    Frame f = seq.load(i);
+    if (i == 3) f.depth = DepthImage(f.depth.width(), f.depth.height(), 0.0f);  // sensor blackout
+    results.push_back(tracker.track(f));
+  }
+  EXPECT_EQ(results[3].icp.verdict, IcpVerdict::too_few_points);
+  EXPECT_TRUE(results[3].kept_last_motion);
+  // Constant velocity through the gap: 10 mm further along the rail.
+  const Eigen::Isometry3d gt3 = seq.ground_truth(3).value();
+  EXPECT_LT(test::translation_error(results[3].T_wc.pose, gt3), 1e-3);
+  // The next frame cannot align to the blank one either, and says so.
+  EXPECT_TRUE(results[4].kept_last_motion);
+  EXPECT_LT(test::translation_error(results[4].T_wc.pose, seq.ground_truth(4).value()), 2e-3);
+}
+
+TEST(KeyframeTracker, WrongSizedFrameIsAnInputError) {
+  KeyframeTracker tracker;
+  Frame f;
+  f.camera = synthetic_camera(64, 48);
+  f.depth = DepthImage(48, 64, 1.0f);
+  EXPECT_THROW(tracker.track(f), InputError);
+  EXPECT_FALSE(tracker.has_keyframe());
+  EXPECT_THROW(tracker.keyframe(), std::logic_error);
+}
+
+TEST(KeyframeTracker, InvalidParamsAreRejected) {
+  FrontendParams params;
+  params.icp.iterations = {0, 0, 0};
+  EXPECT_THROW(KeyframeTracker{params}, InputError);
+}
+
+}  // namespace
+}  // namespace jpcr

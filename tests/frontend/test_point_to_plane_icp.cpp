@@ -1,0 +1,124 @@
+// ICP-ftf on exact synthetic pairs: the known motion is recovered, a plane is degenerate, no
+// overlap is never `ok`, and bad frames give verdicts, not crashes.
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "jpcr/frontend/point_to_plane_icp.hpp"
+#include "synthetic_views.hpp"
+
+namespace jpcr {
+namespace {
+
+using test::kDeg;
+
+struct Pair {
+  FramePyramid source, target;
+  Eigen::Isometry3d truth;  // source → target
+};
+
+// The target at T_wt and the source moved by `delta` in the target's frame.
+Pair render_pair(const SyntheticScene& scene, const Eigen::Isometry3d& T_wt,
+                 const Eigen::Isometry3d& delta) {
+  return {preprocess(test::render_at(scene, T_wt * delta)),
+          preprocess(test::render_at(scene, T_wt)), delta};
+}
+
+TEST(PointToPlaneIcp, RecoversAKnownMotionOnNoiseFreeData) {
+  // 2 cm and 2° (the case), noise-free: within 0.1 mm and 0.01°.
+  const Pair pair = render_pair(test::room(), test::room_view(), test::motion(0.02, 2.0 * kDeg));
+  IcpParams params;
+  params.iterations = {10, 10, 10};
+  const IcpResult r =
+      align_point_to_plane(pair.source, pair.target, Eigen::Isometry3d::Identity(), params);
+  EXPECT_EQ(r.verdict, IcpVerdict::ok) << to_string(r.verdict);
+  EXPECT_LT(test::translation_error(r.pose, pair.truth), 1e-4);
+  EXPECT_LT(test::rotation_error(r.pose, pair.truth), 0.01 * kDeg);
+  EXPECT_GT(r.inlier_ratio, 0.8);
+  EXPECT_LT(r.rms, 1e-3);
+  EXPECT_GT(r.degeneracy, params.degeneracy_threshold);
+  EXPECT_TRUE(r.eigenvalues.allFinite());
+  // The covariance is symmetric positive definite and tiny for exact data.
+  EXPECT_LT((r.covariance - r.covariance.transpose()).norm(), 1e-12 * r.covariance.norm());
+  EXPECT_GT(r.covariance.ldlt().vectorD().minCoeff(), 0.0);
+  EXPECT_LT(r.covariance.diagonal().head<3>().maxCoeff(), 1e-8);  // σ_t < 0.1 mm
+}
+
+TEST(PointToPlaneIcp, DefaultScheduleRecoversTheMotionToo) {
+  const Pair pair = render_pair(test::room(), test::room_view(), test::motion(0.02, 2.0 * kDeg));
+  const IcpResult r = align_point_to_plane(pair.source, pair.target, Eigen::Isometry3d::Identity());
+  EXPECT_EQ(r.verdict, IcpVerdict::ok) << to_string(r.verdict);
+  EXPECT_LT(test::translation_error(r.pose, pair.truth), 2e-4);
+  EXPECT_LT(test::rotation_error(r.pose, pair.truth), 0.02 * kDeg);
+}
+
+TEST(PointToPlaneIcp, InvariantToTheInitialGuessDirection) {
+  // Starting from the truth, it stays there.
+  const Pair pair = render_pair(test::room(), test::room_view(), test::motion(0.02, 2.0 * kDeg));
+  const IcpResult r = align_point_to_plane(pair.source, pair.target, pair.truth);
+  EXPECT_EQ(r.verdict, IcpVerdict::ok);
+  EXPECT_LT(test::translation_error(r.pose, pair.truth), 1e-4);
+  EXPECT_LT(test::rotation_error(r.pose, pair.truth), 0.01 * kDeg);
+}
+
+TEST(PointToPlaneIcp, ASinglePlaneIsDegenerate) {
+  SyntheticScene plane;
+  plane.surfaces = {Plane{Eigen::Vector3d(0, 2, 0), Eigen::Vector3d(0, -1, 0)}};
+  const Eigen::Isometry3d T_wt = test::look_from({0, 0, 1}, {0.3, 2, 1.1});
+  const Pair pair = render_pair(plane, T_wt, test::motion(0.01, 1.0 * kDeg));
+  const IcpResult r = align_point_to_plane(pair.source, pair.target, Eigen::Isometry3d::Identity());
+  EXPECT_EQ(r.verdict, IcpVerdict::degenerate) << to_string(r.verdict);
+  EXPECT_LT(r.degeneracy, 1e-6);  // three directions are unobserved: exactly 0 up to rounding
+  EXPECT_GT(r.inlier_ratio, 0.9);
+  // The damping keeps the unobserved directions from running away.
+  EXPECT_LT((r.pose.translation()).norm(), 0.05);
+}
+
+TEST(PointToPlaneIcp, NoOverlapIsNotOk) {
+  // The camera turned by 180°: nothing the source sees is in the target's view. Given the true
+  // motion, the source points land behind the target camera.
+  const Eigen::Isometry3d half_turn(Eigen::AngleAxisd(M_PI, Eigen::Vector3d::UnitY()));
+  const Pair pair = render_pair(test::room(), test::room_view(), half_turn);
+  const IcpResult truth_start = align_point_to_plane(pair.source, pair.target, pair.truth);
+  EXPECT_NE(truth_start.verdict, IcpVerdict::ok) << to_string(truth_start.verdict);
+  EXPECT_EQ(truth_start.verdict, IcpVerdict::too_few_points);
+  const IcpResult identity_start =
+      align_point_to_plane(pair.source, pair.target, Eigen::Isometry3d::Identity());
+  EXPECT_NE(identity_start.verdict, IcpVerdict::ok) << to_string(identity_start.verdict);
+}
+
+TEST(PointToPlaneIcp, EmptyAndNanFramesGiveVerdictsNotCrashes) {
+  const FramePyramid good = preprocess(test::render_at(test::room(), test::room_view()));
+  Frame nan_frame;
+  nan_frame.camera = synthetic_camera();
+  nan_frame.depth = DepthImage(640, 480, std::numeric_limits<float>::quiet_NaN());
+  const FramePyramid empty = preprocess(nan_frame);
+  EXPECT_EQ(empty.levels[0].valid_vertices, 0u);
+  for (const auto& [s, t] : {std::pair(&empty, &good), std::pair(&good, &empty)}) {
+    const IcpResult r = align_point_to_plane(*s, *t, Eigen::Isometry3d::Identity());
+    EXPECT_EQ(r.verdict, IcpVerdict::too_few_points);
+    EXPECT_TRUE(r.pose.matrix().isIdentity());
+  }
+}
+
+TEST(PointToPlaneIcp, ATooLargeMotionIsDiverged) {
+  // A correct 5 cm alignment, but max_translation says no frame moves that far.
+  const Pair pair = render_pair(test::room(), test::room_view(), test::motion(0.05, 1.0 * kDeg));
+  IcpParams params;
+  params.max_translation = 0.03;
+  const IcpResult r =
+      align_point_to_plane(pair.source, pair.target, Eigen::Isometry3d::Identity(), params);
+  EXPECT_EQ(r.verdict, IcpVerdict::diverged) << to_string(r.verdict);
+}
+
+TEST(PointToPlaneIcp, RobustWeights) {
+  EXPECT_FLOAT_EQ(robust_weight(0.005f, RobustLoss::huber, 0.01f), 1.0f);
+  EXPECT_FLOAT_EQ(robust_weight(-0.04f, RobustLoss::huber, 0.01f), 0.25f);
+  EXPECT_FLOAT_EQ(robust_weight(0.0f, RobustLoss::tukey, 0.01f), 1.0f);
+  EXPECT_FLOAT_EQ(robust_weight(0.005f, RobustLoss::tukey, 0.01f), 0.5625f);
+  EXPECT_FLOAT_EQ(robust_weight(0.02f, RobustLoss::tukey, 0.01f), 0.0f);
+  EXPECT_FLOAT_EQ(robust_weight(5.0f, RobustLoss::none, 0.01f), 1.0f);
+}
+
+}  // namespace
+}  // namespace jpcr
