@@ -10,21 +10,33 @@ namespace jpcr {
 
 namespace {
 
-std::size_t count_valid(const VertexMap& vertices) {
-  std::size_t n = 0;
-  for (const Eigen::Vector3f& x : vertices)
-    n += is_valid(x) ? 1 : 0;
-  return n;
-}
-
-// Depth in metres with every non-measurement as 0 and the working range applied.
-DepthImage clean_depth(const DepthImage& depth, const PreprocessParams& p) {
-  DepthImage out(depth.width(), depth.height(), 0.0f);
-  for (std::size_t i = 0; i < depth.size(); ++i) {
-    const float z = depth[i];
-    if (is_valid_depth(z) && z >= p.min_depth && z <= p.max_depth) out[i] = z;
+// Depth with every non-measurement as 0 and the working range applied, and its vertex map
+// (method.md §1), in one pass; returns the number of valid vertices.
+std::size_t clean_and_backproject(const DepthImage& raw, const CameraIntrinsics& c,
+                                  const PreprocessParams& p, DepthImage& depth,
+                                  VertexMap& vertices) {
+  const int w = raw.width(), h = raw.height();
+  depth = DepthImage(w, h);
+  vertices = VertexMap(w, h, Eigen::Vector3f::Zero());
+  const float fx = static_cast<float>(c.fx), fy = static_cast<float>(c.fy);
+  const float cx = static_cast<float>(c.cx), cy = static_cast<float>(c.cy);
+  std::size_t valid = 0;
+#pragma omp parallel for schedule(static) reduction(+ : valid)
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const float z = raw(u, v);
+      if (is_valid_depth(z) && z >= p.min_depth && z <= p.max_depth) {
+        depth(u, v) = z;
+        vertices(u, v) =
+            backproject<float>(static_cast<float>(u), static_cast<float>(v), z, fx, fy, cx, cy);
+        ++valid;
+      } else {
+        depth(u, v) = 0.0f;
+        vertices(u, v) = invalid_vector();
+      }
+    }
   }
-  return out;
+  return valid;
 }
 
 }  // namespace
@@ -122,6 +134,12 @@ NormalMap compute_normal_map(const VertexMap& vertices, int offset, float max_ju
   return normals;
 }
 
+NormalLookup normals_for(const FramePyramid& pyramid, int level) {
+  const bool own = !pyramid.levels.at(level).normals.empty() ||
+                   level + 1 >= static_cast<int>(pyramid.levels.size());
+  return {own ? &pyramid.levels[level].normals : &pyramid.levels[level + 1].normals, own ? 0 : 1};
+}
+
 FramePyramid preprocess(const Frame& frame, const PreprocessParams& params) {
   try {
     frame.camera.validate();
@@ -141,18 +159,25 @@ FramePyramid preprocess(const Frame& frame, const PreprocessParams& params) {
   FramePyramid pyramid;
   pyramid.timestamp = frame.timestamp;
   pyramid.levels.resize(FramePyramid::kLevels);
-  DepthImage depth = clean_depth(frame.depth, params);
-  if (params.bilateral) depth = bilateral_filter(depth, params);
+  // Level 0: the frame's depth without non-measurements and outside the working range, and
+  // optionally filtered; each next level averages 2x2 blocks of the one before.
   for (int l = 0; l < FramePyramid::kLevels; ++l) {
     PyramidLevel& level = pyramid.levels[l];
     level.camera = frame.camera.pyramid_level(l);
-    level.depth =
-        l == 0 ? std::move(depth)
+    const DepthImage input =
+        l == 0 ? frame.depth
                : downsample_depth(pyramid.levels[l - 1].depth, params.pyramid_max_depth_step);
-    level.vertices = compute_vertex_map(level.depth, level.camera);
-    level.normals = compute_normal_map(level.vertices, l == 0 ? params.normal_offset : 1,
+    level.valid_vertices =
+        clean_and_backproject(input, level.camera, params, level.depth, level.vertices);
+    if (l == 0 && params.bilateral) {
+      const DepthImage filtered = bilateral_filter(level.depth, params);
+      level.valid_vertices =
+          clean_and_backproject(filtered, level.camera, params, level.depth, level.vertices);
+    }
+    // The same metric support at every level: ±normal_offset px at full resolution.
+    if (l == 0 && !params.full_resolution_normals) continue;
+    level.normals = compute_normal_map(level.vertices, std::max(1, params.normal_offset >> l),
                                        params.normal_max_jump);
-    level.valid_vertices = count_valid(level.vertices);
   }
   return pyramid;
 }

@@ -16,7 +16,8 @@ struct PyramidLevel {
   CameraIntrinsics camera;
   DepthImage depth;  // m, 0 where there is no measurement
   VertexMap vertices;
-  NormalMap normals;  // unit, n·X < 0; NaN at edges and where the vertex is missing
+  NormalMap normals;  // unit, n·X < 0; NaN at edges and where the vertex is missing. Empty at
+                      // level 0 unless PreprocessParams::full_resolution_normals.
   std::size_t valid_vertices = 0;
 };
 
@@ -25,6 +26,17 @@ struct FramePyramid {
   double timestamp = 0.0;
   std::vector<PyramidLevel> levels;  // levels[0] is full resolution, each next one half the size
 };
+
+/// The normal map that serves `level`: its own, or when it has none the next coarser level's,
+/// read at (u >> shift, v >> shift).
+struct NormalLookup {
+  const NormalMap* normals = nullptr;
+  int shift = 0;
+  const Eigen::Vector3f& operator()(int u, int v) const {
+    return (*normals)(u >> shift, v >> shift);
+  }
+};
+NormalLookup normals_for(const FramePyramid& pyramid, int level);
 
 /// Throws InputError when the depth image size differs from the camera's, or the camera is
 /// invalid. NaN, Inf and negative depths read as "no measurement".

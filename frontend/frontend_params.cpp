@@ -44,6 +44,8 @@ void IcpParams::validate() const {
   require(positive(max_normal_angle) && max_normal_angle <= 180.0f, "max_normal_angle",
           "must be in (0, 180] (deg)");
   require(positive(robust_scale), "robust_scale", "must be positive (m)");
+  require(depth_weight_exponent >= 0 && depth_weight_exponent <= 6, "depth_weight_exponent",
+          "must be in 0..6");
   require(std::isfinite(min_step_translation) && min_step_translation >= 0.0f,
           "min_step_translation", "must be >= 0 (m)");
   require(std::isfinite(min_step_rotation) && min_step_rotation >= 0.0f, "min_step_rotation",

@@ -19,10 +19,15 @@ struct PreprocessParams {
   /// A 2x2 block is averaged into the next level only over depths within this distance of the
   /// block's nearest depth (depth edges are not blurred).
   float pyramid_max_depth_step = 0.05f;  // m
-  /// Normals are the cross product of central differences at ±normal_offset pixels (level 0;
-  /// coarser levels use ±1). A difference longer than normal_max_jump × z marks a depth edge,
+  /// Normals are the cross product of central differences at ±normal_offset pixels at full
+  /// resolution (level l uses ±max(1, normal_offset / 2^l): the same support in the scene). A
+  /// difference longer than normal_max_jump × z marks a depth edge,
   /// where no normal is computed.
-  int normal_offset = 1;          // px
+  int normal_offset = 4;  // px
+  /// false: level 0 gets no normal map of its own and borrows level 1's (the same support in the
+  /// scene at a quarter of the cost); ICP at level 0 then pairs full-resolution vertices with
+  /// them. true: level 0 has its own normals (for consumers that need them).
+  bool full_resolution_normals = false;
   float normal_max_jump = 0.08f;  // fraction of z per pixel of offset
 
   /// Throws InputError "field: problem" for the first invalid field.
@@ -35,12 +40,16 @@ enum class RobustLoss { none, huber, tukey };
 struct IcpParams {
   /// Gauss-Newton iterations per pyramid level, finest (640x480) first. Coarse to fine: level 2
   /// is solved first. 0 skips a level.
-  std::array<int, 3> iterations{4, 5, 8};
+  std::array<int, 3> iterations{2, 3, 6};
   int level0_stride = 2;           // px, use every n-th pixel in u and v at the finest level
   float max_distance = 0.1f;       // m, pairs farther apart than this are rejected
   float max_normal_angle = 30.0f;  // deg, pairs whose normals disagree more are rejected
   RobustLoss robust_loss = RobustLoss::huber;
-  float robust_scale = 0.01f;          // m, Huber's δ or Tukey's c on the point-to-plane residual
+  float robust_scale = 0.01f;  // m, Huber's δ or Tukey's c on the point-to-plane residual
+  /// Pairs are also weighted by z^−k, z the target depth in m: the inverse variance of an axial
+  /// noise σ(z) ∝ z^(k/2). Structured-light sensors (Kinect: σ ≈ 0.0019 z² m) have k = 4; 0
+  /// weighs all depths alike.
+  int depth_weight_exponent = 4;
   float min_step_translation = 1e-5f;  // m, stop a level when the update is smaller ...
   float min_step_rotation = 1e-4f;     // deg, ... in both translation and rotation
   /// Relative Levenberg damping added to the diagonal of JᵀWJ, which keeps degenerate

@@ -20,8 +20,7 @@ double ms_since(Clock::time_point start) {
 double overlap_with(const FramePyramid& frame, const FramePyramid& keyframe,
                     const Eigen::Isometry3d& T_kf_c, const IcpParams& icp) {
   const int l = FramePyramid::kLevels - 1;
-  const NormalEquations eq =
-      linearize_point_to_plane(frame.levels[l], keyframe.levels[l], T_kf_c, icp, 1);
+  const NormalEquations eq = linearize_point_to_plane(frame, keyframe, l, T_kf_c, icp, 1);
   return eq.valid > 0 ? static_cast<double>(eq.inliers) / eq.valid : 0.0;
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -45,6 +46,45 @@ void describe(const NormalEquations& eq, IcpResult& r) {
       (eq.cost / dof) * eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
 }
 
+// Sums over one image row in single precision (at most a few hundred terms), added to the
+// double-precision NormalEquations once per row: float speed, double accumulation.
+struct FloatSums {
+  float upper[21], b[6], cost, sum_squares, sum_weights;
+  std::size_t inliers;
+
+  void clear() {
+    std::fill(std::begin(upper), std::end(upper), 0.0f);
+    std::fill(std::begin(b), std::end(b), 0.0f);
+    cost = sum_squares = sum_weights = 0.0f;
+    inliers = 0;
+  }
+
+  void add(const Eigen::Matrix<float, 6, 1>& J, float e, float w) {
+    int k = 0;
+    for (int i = 0; i < 6; ++i) {
+      const float wj = w * J[i];
+      for (int j = i; j < 6; ++j)
+        upper[k++] += wj * J[j];
+      b[i] += wj * e;
+    }
+    cost += w * e * e;
+    sum_squares += e * e;
+    sum_weights += w;
+    ++inliers;
+  }
+
+  void flush_into(NormalEquations& eq) const {
+    for (int k = 0; k < 21; ++k)
+      eq.upper[k] += upper[k];
+    for (int i = 0; i < 6; ++i)
+      eq.b[i] += b[i];
+    eq.cost += cost;
+    eq.sum_squares += sum_squares;
+    eq.sum_weights += sum_weights;
+    eq.inliers += inliers;
+  }
+};
+
 bool is_finite(const Eigen::Isometry3d& T) {
   return T.matrix().allFinite();
 }
@@ -81,9 +121,14 @@ float robust_weight(float e, RobustLoss loss, float scale) {
   return 1.0f;
 }
 
-NormalEquations linearize_point_to_plane(const PyramidLevel& source, const PyramidLevel& target,
+NormalEquations linearize_point_to_plane(const FramePyramid& source_pyramid,
+                                         const FramePyramid& target_pyramid, int level,
                                          const Eigen::Isometry3d& T, const IcpParams& params,
                                          int stride) {
+  const PyramidLevel& source = source_pyramid.levels.at(level);
+  const PyramidLevel& target = target_pyramid.levels.at(level);
+  const NormalLookup source_normals = normals_for(source_pyramid, level);
+  const NormalLookup target_normals = normals_for(target_pyramid, level);
   const Eigen::Matrix3f R = T.linear().cast<float>();
   const Eigen::Vector3f t = T.translation().cast<float>();
   const CameraIntrinsics& c = target.camera;
@@ -94,36 +139,47 @@ NormalEquations linearize_point_to_plane(const PyramidLevel& source, const Pyram
   const float min_cos = std::cos(params.max_normal_angle * static_cast<float>(kDegToRad));
   const RobustLoss loss = params.robust_loss;
   const float scale = params.robust_scale;
+  const int depth_exponent = params.depth_weight_exponent;
   const int sw = source.vertices.width(), sh = source.vertices.height();
   NormalEquations total;
 #pragma omp parallel
   {
     NormalEquations local;
+    FloatSums row;
 #pragma omp for schedule(static) nowait
     for (int v = 0; v < sh; v += stride) {
+      row.clear();
       for (int u = 0; u < sw; u += stride) {
         const Eigen::Vector3f& X = source.vertices(u, v);
         if (!is_valid(X)) continue;
         ++local.valid;
-        const Eigen::Vector3f& ns = source.normals(u, v);
+        const Eigen::Vector3f& ns = source_normals(u, v);
         if (!is_valid(ns)) continue;
         // Projective association (method.md §5): p = T X, projected into the target.
         const Eigen::Vector3f p = R * X + t;
         if (p.z() <= 0.0f) continue;
-        const int ut = static_cast<int>(std::lround(fx * p.x() / p.z() + cx));
-        const int vt = static_cast<int>(std::lround(fy * p.y() / p.z() + cy));
-        if (ut < 0 || vt < 0 || ut >= tw || vt >= th) continue;
-        const Eigen::Vector3f& n = target.normals(ut, vt);
-        if (!is_valid(n)) continue;
+        const float inv_z = 1.0f / p.z();
+        const float uf = fx * p.x() * inv_z + cx + 0.5f, vf = fy * p.y() * inv_z + cy + 0.5f;
+        if (!(uf >= 0.0f && vf >= 0.0f && uf < tw && vf < th)) continue;  // also rejects NaN
+        const int ut = static_cast<int>(uf), vt = static_cast<int>(vf);   // round to nearest
         const Eigen::Vector3f& q = target.vertices(ut, vt);
+        if (!is_valid(q)) continue;  // a borrowed normal can exist where the vertex does not
+        const Eigen::Vector3f& n = target_normals(ut, vt);
+        if (!is_valid(n)) continue;
         // Rejection: distance and normal angle.
-        if ((p - q).squaredNorm() > max_d2) continue;
+        const Eigen::Vector3f d = p - q;
+        if (d.squaredNorm() > max_d2) continue;
         if ((R * ns).dot(n) < min_cos) continue;
-        const float e = PointToPlaneResidual<float>::error(p, q, n);
-        const float w = robust_weight(e, loss, scale);
+        const float e = n.dot(d);  // PointToPlaneResidual::error
+        float w = robust_weight(e, loss, scale);
         if (w <= 0.0f) continue;
-        local.add(PointToPlaneResidual<float>::jacobian(p, n), e, w);
+        // Inverse variance of an axial noise σ(z) ∝ z^(k/2): w ∝ z^−k (Kinect: k = 4).
+        const float inv_z_target = 1.0f / q.z();
+        for (int k = 0; k < depth_exponent; ++k)
+          w *= inv_z_target;
+        row.add(PointToPlaneResidual<float>::jacobian(p, n), e, w);
       }
+      row.flush_into(local);
     }
 #pragma omp critical(jpcr_icp_reduce)
     total += local;
@@ -154,8 +210,7 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
     const double needed = params.min_inliers * samples(source.levels[l], stride) / base;
     result.converged = false;
     for (int it = 0; it < iterations; ++it) {
-      const NormalEquations eq =
-          linearize_point_to_plane(source.levels[l], target.levels[l], T, params, stride);
+      const NormalEquations eq = linearize_point_to_plane(source, target, l, T, params, stride);
       last = eq;
       have_system = true;
       if (static_cast<double>(eq.inliers) < needed) {

@@ -52,9 +52,9 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
 /// One pass of association and reduction at one level: every stride-th source pixel is mapped
 /// with T, projected into the target, paired with the target vertex and normal there, rejected
 /// by distance and normal angle, weighted, and added to the normal equations (parallel).
-NormalEquations linearize_point_to_plane(const PyramidLevel& source, const PyramidLevel& target,
-                                         const Eigen::Isometry3d& T, const IcpParams& params,
-                                         int stride = 1);
+NormalEquations linearize_point_to_plane(const FramePyramid& source, const FramePyramid& target,
+                                         int level, const Eigen::Isometry3d& T,
+                                         const IcpParams& params, int stride = 1);
 
 /// Robust weight of a residual e (m) for params.robust_loss and robust_scale.
 float robust_weight(float e, RobustLoss loss, float scale);

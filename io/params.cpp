@@ -64,6 +64,74 @@ void read_synthetic(YamlSection yaml, SyntheticParams& p) {
   yaml.finish();
 }
 
+// Section `frontend:` (frontend/frontend_params.hpp).
+void read_preprocess(YamlSection yaml, PreprocessParams& p) {
+  yaml.read("min_depth", p.min_depth);
+  yaml.read("max_depth", p.max_depth);
+  yaml.read("bilateral", p.bilateral);
+  yaml.read("bilateral_radius", p.bilateral_radius);
+  yaml.read("bilateral_sigma_space", p.bilateral_sigma_space);
+  yaml.read("bilateral_sigma_depth", p.bilateral_sigma_depth);
+  yaml.read("pyramid_max_depth_step", p.pyramid_max_depth_step);
+  yaml.read("normal_offset", p.normal_offset);
+  yaml.read("normal_max_jump", p.normal_max_jump);
+  yaml.read("full_resolution_normals", p.full_resolution_normals);
+  yaml.finish();
+  validate_in(yaml, p);
+}
+
+void read_icp(YamlSection yaml, IcpParams& p) {
+  std::vector<double> levels;  // absent: keeps the defaults
+  yaml.read("iterations", levels);
+  if (yaml.has("iterations")) {
+    if (levels.size() != p.iterations.size())
+      yaml.fail("iterations", "expected 3 counts, finest level first");
+    for (std::size_t i = 0; i < levels.size(); ++i) {
+      if (levels[i] != static_cast<int>(levels[i])) yaml.fail("iterations", "expected integers");
+      p.iterations[i] = static_cast<int>(levels[i]);
+    }
+  }
+  yaml.read("level0_stride", p.level0_stride);
+  yaml.read("max_distance", p.max_distance);
+  yaml.read("max_normal_angle", p.max_normal_angle);
+  std::string loss = to_string(p.robust_loss);
+  yaml.read_choice("robust_loss", loss, {"none", "huber", "tukey"});
+  p.robust_loss = parse_robust_loss(loss);
+  yaml.read("robust_scale", p.robust_scale);
+  yaml.read("depth_weight_exponent", p.depth_weight_exponent);
+  yaml.read("min_step_translation", p.min_step_translation);
+  yaml.read("min_step_rotation", p.min_step_rotation);
+  yaml.read("damping", p.damping);
+  yaml.read("min_inliers", p.min_inliers);
+  yaml.read("min_inlier_ratio", p.min_inlier_ratio);
+  yaml.read("degeneracy_threshold", p.degeneracy_threshold);
+  yaml.read("max_translation", p.max_translation);
+  yaml.read("max_rotation", p.max_rotation);
+  yaml.finish();
+  validate_in(yaml, p);
+}
+
+void read_tracker(YamlSection yaml, TrackerParams& p) {
+  std::string mode = to_string(p.mode), prior = to_string(p.motion_prior);
+  yaml.read_choice("mode", mode, {"frame_to_frame", "frame_to_keyframe"});
+  yaml.read_choice("motion_prior", prior, {"identity", "constant_velocity"});
+  p.mode = parse_tracking_mode(mode);
+  p.motion_prior = parse_motion_prior(prior);
+  yaml.read("keyframe_translation", p.keyframe_translation);
+  yaml.read("keyframe_rotation", p.keyframe_rotation);
+  yaml.read("keyframe_overlap", p.keyframe_overlap);
+  yaml.read("accept_degenerate", p.accept_degenerate);
+  yaml.finish();
+  validate_in(yaml, p);
+}
+
+void read_frontend(YamlSection yaml, FrontendParams& p) {
+  read_preprocess(yaml.section("preprocess"), p.preprocess);
+  read_icp(yaml.section("icp"), p.icp);
+  read_tracker(yaml.section("tracker"), p.tracker);
+  yaml.finish();
+}
+
 }  // namespace
 
 Params load_params(const std::string& path) {
@@ -75,6 +143,7 @@ Params parse_params(const std::string& text, const std::string& path) {
   Params params;
   read_dataset(yaml.section("dataset"), params.dataset);
   read_synthetic(yaml.section("synthetic"), params.synthetic);
+  read_frontend(yaml.section("frontend"), params.frontend);
   yaml.finish();
   return params;
 }

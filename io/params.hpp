@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "jpcr/frontend/frontend_params.hpp"
 #include "jpcr/io/synthetic_noise.hpp"
 #include "jpcr/io/synthetic_trajectory.hpp"
 
@@ -23,6 +24,7 @@ struct SyntheticParams {
 struct Params {
   DatasetParams dataset;
   SyntheticParams synthetic;
+  FrontendParams frontend;  // section `frontend:` (jpcr_odometry, the tracker)
 };
 
 /// Loads a parameter file; absent keys keep their defaults. Throws InputError naming the file,

@@ -1,5 +1,6 @@
 // Preprocessing: pyramid sizes and cameras, exact normals of a plane, depth edges kept by the
 // downsampling and the bilateral filter, the working range, and bad input.
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -26,23 +27,32 @@ TEST(FramePyramid, ThreeLevelsHalvingTheCamera) {
   const int widths[] = {640, 320, 160}, heights[] = {480, 240, 120};
   for (int l = 0; l < 3; ++l) {
     EXPECT_EQ(p.levels[l].vertices.width(), widths[l]);
-    EXPECT_EQ(p.levels[l].normals.height(), heights[l]);
+    EXPECT_EQ(p.levels[l].normals.height(), l == 0 ? 0 : heights[l]);  // level 0 borrows level 1's
     EXPECT_EQ(p.levels[l].camera.width, widths[l]);
     EXPECT_GT(p.levels[l].valid_vertices, static_cast<std::size_t>(0.95 * widths[l] * heights[l]));
   }
   EXPECT_DOUBLE_EQ(p.levels[2].camera.fx, synthetic_camera().fx / 4.0);
+  const NormalLookup n0 = normals_for(p, 0), n1 = normals_for(p, 1);
+  EXPECT_EQ(n0.normals, &p.levels[1].normals);
+  EXPECT_EQ(n0.shift, 1);
+  EXPECT_EQ(n1.normals, &p.levels[1].normals);
+  EXPECT_EQ(n1.shift, 0);
+  EXPECT_EQ(&n0(301, 199), &p.levels[1].normals(150, 99));
 }
 
 TEST(FramePyramid, NormalsOfAPlaneAreExactAndFaceTheCamera) {
   const Eigen::Isometry3d T_wc = test::look_from({0, 0, 1}, {0.5, 2, 1.2});
   const Eigen::Vector3f expected =
       (T_wc.linear().transpose() * Eigen::Vector3d(0, -1, 0)).cast<float>();
-  const FramePyramid p = preprocess(test::render_at(wall(), T_wc));
+  PreprocessParams params;
+  params.full_resolution_normals = true;
+  const FramePyramid p = preprocess(test::render_at(wall(), T_wc), params);
   for (int l = 0; l < 3; ++l) {
     const PyramidLevel& level = p.levels[l];
+    const int border = std::max(1, params.normal_offset >> l);
     int checked = 0;
-    for (int v = 2; v < level.normals.height() - 2; ++v) {
-      for (int u = 2; u < level.normals.width() - 2; ++u) {
+    for (int v = border; v < level.normals.height() - border; ++v) {
+      for (int u = border; u < level.normals.width() - border; ++u) {
         const Eigen::Vector3f& n = level.normals(u, v);
         ASSERT_TRUE(is_valid(n)) << "level " << l << " pixel " << u << "," << v;
         // Float vertices of a plane: the cross product is exact to ~1e-4 rad at the coarsest.

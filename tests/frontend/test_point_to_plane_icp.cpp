@@ -1,5 +1,6 @@
 // ICP-ftf on exact synthetic pairs: the known motion is recovered, a plane is degenerate, no
 // overlap is never `ok`, and bad frames give verdicts, not crashes.
+#include <cmath>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -50,6 +51,24 @@ TEST(PointToPlaneIcp, DefaultScheduleRecoversTheMotionToo) {
   EXPECT_EQ(r.verdict, IcpVerdict::ok) << to_string(r.verdict);
   EXPECT_LT(test::translation_error(r.pose, pair.truth), 2e-4);
   EXPECT_LT(test::rotation_error(r.pose, pair.truth), 0.02 * kDeg);
+}
+
+TEST(PointToPlaneIcp, HolesInTheDepthDoNotPoisonTheSums) {
+  // Real sensors drop pixels: every 7th pixel of both frames has no depth. A full-resolution
+  // vertex may then be missing where the borrowed coarser normal exists.
+  const Eigen::Isometry3d truth = test::motion(0.02, 2.0 * kDeg);
+  Frame source = test::render_at(test::room(), test::room_view() * truth);
+  Frame target = test::render_at(test::room(), test::room_view());
+  for (std::size_t i = 0; i < source.depth.size(); i += 7) {
+    source.depth[i] = 0.0f;
+    target.depth[(i + 3) % target.depth.size()] = std::numeric_limits<float>::quiet_NaN();
+  }
+  const IcpResult r =
+      align_point_to_plane(preprocess(source), preprocess(target), Eigen::Isometry3d::Identity());
+  EXPECT_EQ(r.verdict, IcpVerdict::ok) << to_string(r.verdict);
+  EXPECT_TRUE(std::isfinite(r.rms));
+  EXPECT_LT(test::translation_error(r.pose, truth), 2e-4);
+  EXPECT_LT(test::rotation_error(r.pose, truth), 0.02 * kDeg);
 }
 
 TEST(PointToPlaneIcp, InvariantToTheInitialGuessDirection) {
