@@ -10,38 +10,44 @@ namespace jpcr {
 
 namespace {
 
+constexpr int kChunkRows = 16;  // rows per RowPool chunk
+
 // Depth with every non-measurement as 0 and the working range applied, and its vertex map
 // (method.md §1), in one pass; returns the number of valid vertices.
 std::size_t clean_and_backproject(const DepthImage& raw, const CameraIntrinsics& c,
-                                  const PreprocessParams& p, DepthImage& depth,
-                                  VertexMap& vertices) {
+                                  const PreprocessParams& p, DepthImage& depth, VertexMap& vertices,
+                                  RowPool* pool) {
   const int w = raw.width(), h = raw.height();
   depth = DepthImage(w, h);
   vertices = VertexMap(w, h, Eigen::Vector3f::Zero());
   const float fx = static_cast<float>(c.fx), fy = static_cast<float>(c.fy);
   const float cx = static_cast<float>(c.cx), cy = static_cast<float>(c.cy);
-  std::size_t valid = 0;
-#pragma omp parallel for schedule(static) reduction(+ : valid)
-  for (int v = 0; v < h; ++v) {
-    for (int u = 0; u < w; ++u) {
-      const float z = raw(u, v);
-      if (is_valid_depth(z) && z >= p.min_depth && z <= p.max_depth) {
-        depth(u, v) = z;
-        vertices(u, v) =
-            backproject<float>(static_cast<float>(u), static_cast<float>(v), z, fx, fy, cx, cy);
-        ++valid;
-      } else {
-        depth(u, v) = 0.0f;
-        vertices(u, v) = invalid_vector();
+  std::vector<std::size_t> valid(pool ? pool->slots() : 1, 0);
+  for_rows(pool, h, kChunkRows, [&](int begin, int end, int slot) {
+    for (int v = begin; v < end; ++v) {
+      for (int u = 0; u < w; ++u) {
+        const float z = raw(u, v);
+        if (is_valid_depth(z) && z >= p.min_depth && z <= p.max_depth) {
+          depth(u, v) = z;
+          vertices(u, v) =
+              backproject<float>(static_cast<float>(u), static_cast<float>(v), z, fx, fy, cx, cy);
+          ++valid[slot];
+        } else {
+          depth(u, v) = 0.0f;
+          vertices(u, v) = invalid_vector();
+        }
       }
     }
-  }
-  return valid;
+  });
+  std::size_t total = 0;
+  for (std::size_t n : valid)
+    total += n;
+  return total;
 }
 
 }  // namespace
 
-DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& p) {
+DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& p, RowPool* pool) {
   const int r = p.bilateral_radius, w = depth.width(), h = depth.height();
   // Spatial weights once; the range weight exp(−Δz²/2σ²) from a table over |Δz| in [0, 3σ).
   std::vector<float> spatial((2 * r + 1) * (2 * r + 1));
@@ -57,80 +63,83 @@ DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& p) 
     range[i] = std::exp(-0.5f * d * d);
   }
   DepthImage out(w, h, 0.0f);
-#pragma omp parallel for schedule(static)
-  for (int v = 0; v < h; ++v) {
-    for (int u = 0; u < w; ++u) {
-      const float z = depth(u, v);
-      if (z <= 0.0f) continue;
-      float sum = 0.0f, weight = 0.0f;
-      for (int dv = std::max(-r, -v); dv <= std::min(r, h - 1 - v); ++dv) {
-        const float* row = &depth(0, v + dv);
-        const float* ws = &spatial[(dv + r) * (2 * r + 1) + r];
-        for (int du = std::max(-r, -u); du <= std::min(r, w - 1 - u); ++du) {
-          const float zi = row[u + du];
-          const float d = std::abs(zi - z);
-          if (zi <= 0.0f || d >= cutoff) continue;
-          const float wi = ws[du] * range[static_cast<int>(d * to_bin)];
-          sum += wi * zi;
-          weight += wi;
+  for_rows(pool, h, kChunkRows, [&](int begin, int end, int) {
+    for (int v = begin; v < end; ++v) {
+      for (int u = 0; u < w; ++u) {
+        const float z = depth(u, v);
+        if (z <= 0.0f) continue;
+        float sum = 0.0f, weight = 0.0f;
+        for (int dv = std::max(-r, -v); dv <= std::min(r, h - 1 - v); ++dv) {
+          const float* row = &depth(0, v + dv);
+          const float* ws = &spatial[(dv + r) * (2 * r + 1) + r];
+          for (int du = std::max(-r, -u); du <= std::min(r, w - 1 - u); ++du) {
+            const float zi = row[u + du];
+            const float d = std::abs(zi - z);
+            if (zi <= 0.0f || d >= cutoff) continue;
+            const float wi = ws[du] * range[static_cast<int>(d * to_bin)];
+            sum += wi * zi;
+            weight += wi;
+          }
         }
+        out(u, v) = sum / weight;  // weight ≥ the centre's own weight > 0
       }
-      out(u, v) = sum / weight;  // weight ≥ the centre's own weight > 0
     }
-  }
+  });
   return out;
 }
 
-DepthImage downsample_depth(const DepthImage& depth, float max_depth_step) {
+DepthImage downsample_depth(const DepthImage& depth, float max_depth_step, RowPool* pool) {
   DepthImage out(depth.width() / 2, depth.height() / 2, 0.0f);
-#pragma omp parallel for schedule(static)
-  for (int v = 0; v < out.height(); ++v) {
-    for (int u = 0; u < out.width(); ++u) {
-      const float z[4] = {depth(2 * u, 2 * v), depth(2 * u + 1, 2 * v), depth(2 * u, 2 * v + 1),
-                          depth(2 * u + 1, 2 * v + 1)};
-      float nearest = 0.0f;
-      for (float zi : z)
-        if (zi > 0.0f && (nearest == 0.0f || zi < nearest)) nearest = zi;
-      if (nearest == 0.0f) continue;
-      float sum = 0.0f;
-      int n = 0;
-      for (float zi : z) {
-        if (zi > 0.0f && zi - nearest <= max_depth_step) {
-          sum += zi;
-          ++n;
+  for_rows(pool, out.height(), kChunkRows, [&](int begin, int end, int) {
+    for (int v = begin; v < end; ++v) {
+      for (int u = 0; u < out.width(); ++u) {
+        const float z[4] = {depth(2 * u, 2 * v), depth(2 * u + 1, 2 * v), depth(2 * u, 2 * v + 1),
+                            depth(2 * u + 1, 2 * v + 1)};
+        float nearest = 0.0f;
+        for (float zi : z)
+          if (zi > 0.0f && (nearest == 0.0f || zi < nearest)) nearest = zi;
+        if (nearest == 0.0f) continue;
+        float sum = 0.0f;
+        int n = 0;
+        for (float zi : z) {
+          if (zi > 0.0f && zi - nearest <= max_depth_step) {
+            sum += zi;
+            ++n;
+          }
         }
+        out(u, v) = sum / static_cast<float>(n);
       }
-      out(u, v) = sum / static_cast<float>(n);
     }
-  }
+  });
   return out;
 }
 
-NormalMap compute_normal_map(const VertexMap& vertices, int offset, float max_jump) {
+NormalMap compute_normal_map(const VertexMap& vertices, int offset, float max_jump, RowPool* pool) {
   const int w = vertices.width(), h = vertices.height(), k = offset;
   NormalMap normals(w, h, invalid_vector());
   const float jump = max_jump * static_cast<float>(2 * k);
-#pragma omp parallel for schedule(static)
-  for (int v = k; v < h - k; ++v) {
-    for (int u = k; u < w - k; ++u) {
-      const Eigen::Vector3f& x = vertices(u, v);
-      if (!is_valid(x)) continue;
-      const Eigen::Vector3f& l = vertices(u - k, v);
-      const Eigen::Vector3f& r = vertices(u + k, v);
-      const Eigen::Vector3f& t = vertices(u, v - k);
-      const Eigen::Vector3f& b = vertices(u, v + k);
-      if (!is_valid(l) || !is_valid(r) || !is_valid(t) || !is_valid(b)) continue;
-      const Eigen::Vector3f du = r - l, dv = b - t;
-      const float limit = jump * x.z();
-      if (std::abs(du.z()) > limit || std::abs(dv.z()) > limit) continue;
-      Eigen::Vector3f n = du.cross(dv);
-      const float norm = n.norm();
-      if (!(norm > 0.0f)) continue;
-      n /= norm;
-      if (n.dot(x) > 0.0f) n = -n;  // toward the camera (method.md §1)
-      normals(u, v) = n;
+  for_rows(pool, h - 2 * k, kChunkRows, [&](int begin, int end, int) {
+    for (int v = begin + k; v < end + k; ++v) {
+      for (int u = k; u < w - k; ++u) {
+        const Eigen::Vector3f& x = vertices(u, v);
+        if (!is_valid(x)) continue;
+        const Eigen::Vector3f& l = vertices(u - k, v);
+        const Eigen::Vector3f& r = vertices(u + k, v);
+        const Eigen::Vector3f& t = vertices(u, v - k);
+        const Eigen::Vector3f& b = vertices(u, v + k);
+        if (!is_valid(l) || !is_valid(r) || !is_valid(t) || !is_valid(b)) continue;
+        const Eigen::Vector3f du = r - l, dv = b - t;
+        const float limit = jump * x.z();
+        if (std::abs(du.z()) > limit || std::abs(dv.z()) > limit) continue;
+        Eigen::Vector3f n = du.cross(dv);
+        const float norm = n.norm();
+        if (!(norm > 0.0f)) continue;
+        n /= norm;
+        if (n.dot(x) > 0.0f) n = -n;  // toward the camera (method.md §1)
+        normals(u, v) = n;
+      }
     }
-  }
+  });
   return normals;
 }
 
@@ -140,7 +149,7 @@ NormalLookup normals_for(const FramePyramid& pyramid, int level) {
   return {own ? &pyramid.levels[level].normals : &pyramid.levels[level + 1].normals, own ? 0 : 1};
 }
 
-FramePyramid preprocess(const Frame& frame, const PreprocessParams& params) {
+FramePyramid preprocess(const Frame& frame, const PreprocessParams& params, RowPool* pool) {
   try {
     frame.camera.validate();
   } catch (const std::invalid_argument& e) {
@@ -166,18 +175,18 @@ FramePyramid preprocess(const Frame& frame, const PreprocessParams& params) {
     level.camera = frame.camera.pyramid_level(l);
     const DepthImage input =
         l == 0 ? frame.depth
-               : downsample_depth(pyramid.levels[l - 1].depth, params.pyramid_max_depth_step);
+               : downsample_depth(pyramid.levels[l - 1].depth, params.pyramid_max_depth_step, pool);
     level.valid_vertices =
-        clean_and_backproject(input, level.camera, params, level.depth, level.vertices);
+        clean_and_backproject(input, level.camera, params, level.depth, level.vertices, pool);
     if (l == 0 && params.bilateral) {
-      const DepthImage filtered = bilateral_filter(level.depth, params);
+      const DepthImage filtered = bilateral_filter(level.depth, params, pool);
       level.valid_vertices =
-          clean_and_backproject(filtered, level.camera, params, level.depth, level.vertices);
+          clean_and_backproject(filtered, level.camera, params, level.depth, level.vertices, pool);
     }
     // The same metric support at every level: ±normal_offset px at full resolution.
     if (l == 0 && !params.full_resolution_normals) continue;
     level.normals = compute_normal_map(level.vertices, std::max(1, params.normal_offset >> l),
-                                       params.normal_max_jump);
+                                       params.normal_max_jump, pool);
   }
   return pyramid;
 }

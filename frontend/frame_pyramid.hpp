@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "jpcr/frontend/frontend_params.hpp"
+#include "jpcr/frontend/row_pool.hpp"
 #include "jpcr/quadric/frame.hpp"
 #include "jpcr/quadric/vertex_map.hpp"
 
@@ -40,17 +41,21 @@ NormalLookup normals_for(const FramePyramid& pyramid, int level);
 
 /// Throws InputError when the depth image size differs from the camera's, or the camera is
 /// invalid. NaN, Inf and negative depths read as "no measurement".
-FramePyramid preprocess(const Frame& frame, const PreprocessParams& params = {});
+/// `pool` spreads the rows over threads; null runs on the calling thread.
+FramePyramid preprocess(const Frame& frame, const PreprocessParams& params = {},
+                        RowPool* pool = nullptr);
 
 /// Edge-preserving smoothing of depth (m); pixels without depth stay without depth.
-DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& params);
+DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& params,
+                            RowPool* pool = nullptr);
 
 /// Half-size depth: each pixel averages the valid depths of its 2x2 block that lie within
 /// max_depth_step of the block's nearest depth.
-DepthImage downsample_depth(const DepthImage& depth, float max_depth_step);
+DepthImage downsample_depth(const DepthImage& depth, float max_depth_step, RowPool* pool = nullptr);
 
 /// Normals from central differences at ±offset pixels; NaN where a neighbour is missing or a
 /// difference is longer than max_jump × z × offset (a depth edge).
-NormalMap compute_normal_map(const VertexMap& vertices, int offset, float max_jump);
+NormalMap compute_normal_map(const VertexMap& vertices, int offset, float max_jump,
+                             RowPool* pool = nullptr);
 
 }  // namespace jpcr

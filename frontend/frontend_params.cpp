@@ -72,6 +72,7 @@ void TrackerParams::validate() const {
 }
 
 void FrontendParams::validate() const {
+  require(threads >= 0 && threads <= 256, "threads", "must be in 0..256 (0: one per core)");
   preprocess.validate();
   icp.validate();
   tracker.validate();

@@ -83,6 +83,7 @@ struct TrackerParams {
 };
 
 struct FrontendParams {
+  int threads = 0;  // threads of the tracker's RowPool, the caller included; 0: one per core
   PreprocessParams preprocess;
   IcpParams icp;
   TrackerParams tracker;

@@ -18,9 +18,9 @@ double ms_since(Clock::time_point start) {
 // Fraction of the frame's valid points at the coarsest level that pair with the keyframe at
 // `T_kf_c`: a cheap overlap measure for the keyframe policy.
 double overlap_with(const FramePyramid& frame, const FramePyramid& keyframe,
-                    const Eigen::Isometry3d& T_kf_c, const IcpParams& icp) {
+                    const Eigen::Isometry3d& T_kf_c, const IcpParams& icp, RowPool* pool) {
   const int l = FramePyramid::kLevels - 1;
-  const NormalEquations eq = linearize_point_to_plane(frame, keyframe, l, T_kf_c, icp, 1);
+  const NormalEquations eq = linearize_point_to_plane(frame, keyframe, l, T_kf_c, icp, 1, pool);
   return eq.valid > 0 ? static_cast<double>(eq.inliers) / eq.valid : 0.0;
 }
 
@@ -30,6 +30,7 @@ KeyframeTracker::KeyframeTracker(const FrontendParams& params,
                                  const Eigen::Isometry3d& initial_pose)
     : params_(params), initial_pose_(initial_pose) {
   params_.validate();
+  pool_ = std::make_unique<RowPool>(params_.threads);
 }
 
 const Keyframe& KeyframeTracker::keyframe() const {
@@ -48,7 +49,8 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
   r.index = frames_;
   r.T_wc.timestamp = frame.timestamp;
   const Clock::time_point start = Clock::now();
-  auto pyramid = std::make_shared<const FramePyramid>(preprocess(frame, params_.preprocess));
+  auto pyramid =
+      std::make_shared<const FramePyramid>(preprocess(frame, params_.preprocess, pool_.get()));
   r.preprocess_ms = ms_since(start);
 
   const TrackerParams& tp = params_.tracker;
@@ -65,7 +67,8 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
                               ? last_good_motion_
                               : Eigen::Isometry3d::Identity());
     const Clock::time_point icp_start = Clock::now();
-    r.icp = align_point_to_plane(*pyramid, reference, T_w_ref.inverse() * predicted, params_.icp);
+    r.icp = align_point_to_plane(*pyramid, reference, T_w_ref.inverse() * predicted, params_.icp,
+                                 pool_.get());
     r.icp_ms = ms_since(icp_start);
     if (is_good(r.icp)) {
       r.T_wc.pose = T_w_ref * r.icp.pose;
@@ -77,7 +80,7 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
     // Keyframe policy: far enough from the keyframe, or too little overlap with it. A failed
     // alignment against the keyframe starts a new one, or tracking could never recover.
     const Eigen::Isometry3d T_kf_c = keyframe_.T_wc.pose.inverse() * r.T_wc.pose;
-    r.overlap = overlap_with(*pyramid, *keyframe_.pyramid, T_kf_c, params_.icp);
+    r.overlap = overlap_with(*pyramid, *keyframe_.pyramid, T_kf_c, params_.icp, pool_.get());
     r.is_keyframe = T_kf_c.translation().norm() > tp.keyframe_translation ||
                     rotation_angle(T_kf_c.linear()) > tp.keyframe_rotation * kDegToRad ||
                     r.overlap < tp.keyframe_overlap || (to_keyframe && r.kept_last_motion);

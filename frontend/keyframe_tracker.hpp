@@ -52,11 +52,13 @@ class KeyframeTracker {
   const Keyframe& keyframe() const;
   const std::vector<int>& keyframe_indices() const { return keyframe_indices_; }
   const FrontendParams& params() const { return params_; }
+  int threads() const { return pool_->slots(); }
 
  private:
   bool is_good(const IcpResult& icp) const;
 
   FrontendParams params_;
+  std::unique_ptr<RowPool> pool_;
   Eigen::Isometry3d initial_pose_;
   int frames_ = 0;
   Keyframe keyframe_;

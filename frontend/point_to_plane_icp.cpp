@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -14,6 +15,7 @@ namespace jpcr {
 namespace {
 
 constexpr double kDegToRad = M_PI / 180.0;
+constexpr int kChunkRows = 8;  // sample rows per RowPool chunk
 
 // Source pixels visited at a level with the given stride.
 double samples(const PyramidLevel& level, int stride) {
@@ -124,7 +126,7 @@ float robust_weight(float e, RobustLoss loss, float scale) {
 NormalEquations linearize_point_to_plane(const FramePyramid& source_pyramid,
                                          const FramePyramid& target_pyramid, int level,
                                          const Eigen::Isometry3d& T, const IcpParams& params,
-                                         int stride) {
+                                         int stride, RowPool* pool) {
   const PyramidLevel& source = source_pyramid.levels.at(level);
   const PyramidLevel& target = target_pyramid.levels.at(level);
   const NormalLookup source_normals = normals_for(source_pyramid, level);
@@ -141,13 +143,12 @@ NormalEquations linearize_point_to_plane(const FramePyramid& source_pyramid,
   const float scale = params.robust_scale;
   const int depth_exponent = params.depth_weight_exponent;
   const int sw = source.vertices.width(), sh = source.vertices.height();
-  NormalEquations total;
-#pragma omp parallel
-  {
-    NormalEquations local;
+  std::vector<NormalEquations> sums(pool ? pool->slots() : 1);
+  const int sample_rows = (sh + stride - 1) / stride;
+  for_rows(pool, sample_rows, kChunkRows, [&](int begin, int end, int slot) {
+    NormalEquations& local = sums[slot];
     FloatSums row;
-#pragma omp for schedule(static) nowait
-    for (int v = 0; v < sh; v += stride) {
+    for (int v = begin * stride; v < end * stride; v += stride) {
       row.clear();
       for (int u = 0; u < sw; u += stride) {
         const Eigen::Vector3f& X = source.vertices(u, v);
@@ -181,14 +182,16 @@ NormalEquations linearize_point_to_plane(const FramePyramid& source_pyramid,
       }
       row.flush_into(local);
     }
-#pragma omp critical(jpcr_icp_reduce)
-    total += local;
-  }
+  });
+  NormalEquations total;
+  for (const NormalEquations& s : sums)
+    total += s;
   return total;
 }
 
 IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& target,
-                               const Eigen::Isometry3d& initial, const IcpParams& params) {
+                               const Eigen::Isometry3d& initial, const IcpParams& params,
+                               RowPool* pool) {
   IcpResult result;
   result.pose = initial;
   const int levels = std::min<int>(source.levels.size(), target.levels.size());
@@ -210,7 +213,8 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
     const double needed = params.min_inliers * samples(source.levels[l], stride) / base;
     result.converged = false;
     for (int it = 0; it < iterations; ++it) {
-      const NormalEquations eq = linearize_point_to_plane(source, target, l, T, params, stride);
+      const NormalEquations eq =
+          linearize_point_to_plane(source, target, l, T, params, stride, pool);
       last = eq;
       have_system = true;
       if (static_cast<double>(eq.inliers) < needed) {

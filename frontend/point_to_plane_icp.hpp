@@ -45,16 +45,19 @@ struct IcpResult {
   IcpVerdict verdict = IcpVerdict::too_few_points;
 };
 
-/// Aligns `source` to `target` starting from `initial` (source → target).
+/// Aligns `source` to `target` starting from `initial` (source → target). `pool` spreads the
+/// pixels over threads; null runs on the calling thread.
 IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& target,
-                               const Eigen::Isometry3d& initial, const IcpParams& params = {});
+                               const Eigen::Isometry3d& initial, const IcpParams& params = {},
+                               RowPool* pool = nullptr);
 
 /// One pass of association and reduction at one level: every stride-th source pixel is mapped
 /// with T, projected into the target, paired with the target vertex and normal there, rejected
-/// by distance and normal angle, weighted, and added to the normal equations (parallel).
+/// by distance and normal angle, weighted, and added to the normal equations.
 NormalEquations linearize_point_to_plane(const FramePyramid& source, const FramePyramid& target,
                                          int level, const Eigen::Isometry3d& T,
-                                         const IcpParams& params, int stride = 1);
+                                         const IcpParams& params, int stride = 1,
+                                         RowPool* pool = nullptr);
 
 /// Robust weight of a residual e (m) for params.robust_loss and robust_scale.
 float robust_weight(float e, RobustLoss loss, float scale);

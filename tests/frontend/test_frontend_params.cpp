@@ -21,6 +21,7 @@ TEST(FrontendParams, DefaultYamlStatesTheBuiltInDefaults) {
   const FrontendParams p =
       load_params(std::string(JPCR_SOURCE_DIR) + "/configs/default.yaml").frontend;
   const FrontendParams d;
+  EXPECT_EQ(p.threads, d.threads);
   EXPECT_EQ(p.preprocess.min_depth, d.preprocess.min_depth);
   EXPECT_EQ(p.preprocess.max_depth, d.preprocess.max_depth);
   EXPECT_EQ(p.preprocess.bilateral, d.preprocess.bilateral);

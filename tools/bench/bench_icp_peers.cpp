@@ -14,9 +14,6 @@
 
 #include <opencv2/core.hpp>
 #include <opencv2/rgbd.hpp>
-#ifdef _OPENMP
-#include <omp.h>
-#endif
 
 #include "cli/arguments.hpp"
 #include "jpcr/frontend/keyframe_tracker.hpp"
@@ -114,6 +111,9 @@ int run(int argc, char** argv) {
       .option("config", "camera YAML", std::string(JPCR_SOURCE_DIR) + "/configs/tum_fr1.yaml")
       .option("params", "parameter YAML whose frontend: section configures jpcr")
       .option("frames", "number of frames to use (0 = all)", "0")
+      .option("threads",
+              "jpcr threads, the caller included (0 = one per core; default: the "
+              "params' frontend.threads)")
       .flag("only-jpcr", "skip OpenCV (for tuning jpcr's parameters; no ratios)")
       .option("save", "write the trajectories to PREFIX_jpcr.txt and PREFIX_opencv.txt");
   return cli::run_program("bench_icp_peers", [&] {
@@ -121,6 +121,7 @@ int run(int argc, char** argv) {
     FrontendParams params;
     if (args.has("params")) params = load_params(args.get("params")).frontend;
     params.tracker.mode = TrackingMode::frame_to_frame;
+    if (args.has("threads")) params.threads = args.get_int("threads");
     const std::unique_ptr<FrameSource> source =
         open_dataset(args.get("dataset"), load_camera_yaml(args.get("config")));
     std::size_t frames = source->size();
@@ -130,18 +131,16 @@ int run(int argc, char** argv) {
     if (frames < 3) throw InputError(args.get("dataset") + ": fewer than 3 frames");
     const Trajectory gt = source->ground_truth_trajectory();
     const Eigen::Isometry3d start = source->ground_truth(0).value_or(Eigen::Isometry3d::Identity());
-#ifdef _OPENMP
-    const int omp_threads = omp_get_max_threads();
-#else
-    const int omp_threads = 1;
-#endif
+    KeyframeTracker tracker(params, start);
+    const int jpcr_threads = tracker.threads();
     std::cerr << "bench_icp_peers: " << source->description() << ", using " << frames
-              << " frames; OpenMP threads " << omp_threads << ", OpenCV threads "
+              << " frames; jpcr threads " << jpcr_threads << ", OpenCV threads "
               << cv::getNumThreads() << '\n';
 
-    KeyframeTracker tracker(params, start);
     OpenCvIcp opencv(source->camera());
-    MethodRun ours{"jpcr ICP-ftf", {}, {}, 0}, peer{"cv::rgbd::ICPOdometry", {}, {}, 0};
+    MethodRun ours, peer;
+    ours.name = "jpcr ICP-ftf";
+    peer.name = "cv::rgbd::ICPOdometry";
     Eigen::Isometry3d peer_pose = start, peer_motion = Eigen::Isometry3d::Identity();
     for (std::size_t i = 0; i < frames; ++i) {
       const Frame frame = source->load(i);  // decoding is not timed
@@ -181,7 +180,7 @@ int run(int argc, char** argv) {
     const Metrics a = evaluate(gt, ours), b = evaluate(gt, peer);
     std::printf("%zu frames of %s, %dx%d, depth only, frame to frame, %d threads\n\n", frames,
                 args.get("dataset").c_str(), source->camera().width, source->camera().height,
-                omp_threads);
+                jpcr_threads);
     std::printf(
         "| method | ATE (m) | RPE (m/s) | RPE (deg/s) | ms/frame (mean) | ms/frame "
         "(median) | failed frames |\n|---|---|---|---|---|---|---|\n");
