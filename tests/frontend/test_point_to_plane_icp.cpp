@@ -1,6 +1,7 @@
 // ICP-ftf on exact synthetic pairs: the known motion is recovered, a plane is degenerate, no
 // overlap is never `ok`, and bad frames give verdicts, not crashes.
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include <gtest/gtest.h>
@@ -35,6 +36,9 @@ TEST(PointToPlaneIcp, RecoversAKnownMotionOnNoiseFreeData) {
   EXPECT_EQ(r.verdict, IcpVerdict::ok) << to_string(r.verdict);
   EXPECT_LT(test::translation_error(r.pose, pair.truth), 1e-4);
   EXPECT_LT(test::rotation_error(r.pose, pair.truth), 0.01 * kDeg);
+  std::printf("2 cm, 2 deg: error %.2e m, %.2e deg after %d iterations\n",
+              test::translation_error(r.pose, pair.truth),
+              test::rotation_error(r.pose, pair.truth) / kDeg, r.iterations);
   EXPECT_GT(r.inlier_ratio, 0.8);
   EXPECT_LT(r.rms, 1e-3);
   EXPECT_GT(r.degeneracy, params.degeneracy_threshold);
@@ -49,6 +53,9 @@ TEST(PointToPlaneIcp, DefaultScheduleRecoversTheMotionToo) {
   const Pair pair = render_pair(test::room(), test::room_view(), test::motion(0.02, 2.0 * kDeg));
   const IcpResult r = align_point_to_plane(pair.source, pair.target, Eigen::Isometry3d::Identity());
   EXPECT_EQ(r.verdict, IcpVerdict::ok) << to_string(r.verdict);
+  std::printf("default schedule: error %.2e m, %.2e deg after %d iterations\n",
+              test::translation_error(r.pose, pair.truth),
+              test::rotation_error(r.pose, pair.truth) / kDeg, r.iterations);
   EXPECT_LT(test::translation_error(r.pose, pair.truth), 2e-4);
   EXPECT_LT(test::rotation_error(r.pose, pair.truth), 0.02 * kDeg);
 }
