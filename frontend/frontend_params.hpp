@@ -40,7 +40,7 @@ enum class RobustLoss { none, huber, tukey };
 struct IcpParams {
   /// Gauss-Newton iterations per pyramid level, finest (640x480) first. Coarse to fine: level 2
   /// is solved first. 0 skips a level.
-  std::array<int, 3> iterations{2, 3, 6};
+  std::array<int, 3> iterations{2, 2, 5};
   int level0_stride = 2;           // px, use every n-th pixel in u and v at the finest level
   float max_distance = 0.1f;       // m, pairs farther apart than this are rejected
   float max_normal_angle = 30.0f;  // deg, pairs whose normals disagree more are rejected

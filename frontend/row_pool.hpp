@@ -34,7 +34,8 @@ class RowPool {
   int slots() const { return static_cast<int>(helpers_.size()) + 1; }
 
   /// Calls body(begin, end, slot) on chunks [begin, end) of [0, rows), at most `chunk` rows
-  /// each, and returns when all are done. Not reentrant: one call at a time per pool.
+  /// each (a pool of one thread makes a single call over all rows), and returns when all are
+  /// done. body must not throw. Not reentrant: one call at a time per pool.
   void for_rows(int rows, int chunk, const Body& body);
 
  private:
