@@ -6,6 +6,7 @@
 
 #include "jpcr/io/synthetic_noise.hpp"
 #include "jpcr/io/synthetic_trajectory.hpp"
+#include "jpcr/quadric/quadric_params.hpp"
 
 namespace jpcr {
 
@@ -23,6 +24,7 @@ struct SyntheticParams {
 struct Params {
   DatasetParams dataset;
   SyntheticParams synthetic;
+  QuadricParams quadric;  // section `quadric:` (pattern, normals, Quad IT)
 };
 
 /// Loads a parameter file; absent keys keep their defaults. Throws InputError naming the file,

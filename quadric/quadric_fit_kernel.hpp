@@ -126,6 +126,14 @@ JPCR_HD bool solve_damped_step(const NormalEquations6<Scalar>& ne, double dampin
   return true;
 }
 
+/// The early stop of Quad IT: every part of the step below its tolerance.
+JPCR_HD bool step_converged(const Eigen::Matrix<double, 6, 1>& delta, const QuadricFitParams& p) {
+  const double dw = delta(0) * delta(0) + delta(1) * delta(1);
+  const double dk = fmax(fabs(delta(3)), fmax(fabs(delta(4)), fabs(delta(5))));
+  return dw < double(p.angle_tolerance) * p.angle_tolerance &&
+         fabs(delta(2)) < p.offset_tolerance && dk < p.curvature_tolerance;
+}
+
 /// Quad IT at pixel (u, v): starts from the plane of `normal` at p̄ = vertices(u, v) and runs up
 /// to p.iterations Gauss-Newton steps. On kValid, q holds the fitted quadric.
 template <typename Scalar>
@@ -146,11 +154,7 @@ JPCR_HD QuadricStatus fit_quadric_pixel(const VertexView& vertices, const PixelO
     Eigen::Matrix<double, 6, 1> delta;
     if (!solve_damped_step(ne, p.damping, delta)) return QuadricStatus::kSingular;
     apply_quadric_update(q, QuadricVector<Scalar>(delta.template cast<Scalar>()));
-    const double dw = delta(0) * delta(0) + delta(1) * delta(1);
-    const double dk = fmax(fabs(delta(3)), fmax(fabs(delta(4)), fabs(delta(5))));
-    if (dw < double(p.angle_tolerance) * p.angle_tolerance && fabs(delta(2)) < p.offset_tolerance &&
-        dk < p.curvature_tolerance)
-      break;
+    if (step_converged(delta, p)) break;
   }
   return QuadricStatus::kValid;
 }

@@ -96,20 +96,61 @@ JPCR_HD Scalar quadric_residual(const QuadricT<Scalar>& q, const Eigen::Matrix<S
 
 /// r and ∂r/∂γ (method.md §3 "Jacobian"): with v = R (X − p̄),
 ///   ∂r/∂γ = ( g·(0, −v_z, v_y), g·(v_z, 0, −v_x), −1, x²/2, x y, y²/2 ).
+/// A quadric flattened to named scalars (R row-major), and one sample's residual and Jacobian in
+/// named scalars: the form the CPU fit vectorises across samples (no arrays, no Eigen products,
+/// no branches) and linearize_quadric wraps with Eigen types.
+template <typename Scalar>
+struct QuadricScalars {
+  Scalar r00, r01, r02, r10, r11, r12, r20, r21, r22, t_z, a, b, c;
+
+  JPCR_HD static QuadricScalars from(const QuadricT<Scalar>& q) {
+    return {q.R(0, 0), q.R(0, 1), q.R(0, 2), q.R(1, 0), q.R(1, 1), q.R(1, 2), q.R(2, 0),
+            q.R(2, 1), q.R(2, 2), q.t_z,     q.a,       q.b,       q.c};
+  }
+};
+
+template <typename Scalar>
+struct SampleLinearization {
+  Scalar r;                       // r(X; γ)
+  Scalar J0, J1, J2, J3, J4, J5;  // ∂r/∂γ
+  Scalar vx, vy, vz;              // v = R (X − p̄)
+  Scalar gx, gy;                  // g = (gx, gy, −1)
+};
+
+/// r and ∂r/∂γ for the sample d = X − p̄ (method.md §3).
+template <typename Scalar>
+JPCR_HD SampleLinearization<Scalar> linearize_sample(const QuadricScalars<Scalar>& q, Scalar dx,
+                                                     Scalar dy, Scalar dz) {
+  const Scalar vx = q.r00 * dx + q.r01 * dy + q.r02 * dz;
+  const Scalar vy = q.r10 * dx + q.r11 * dy + q.r12 * dz;
+  const Scalar vz = q.r20 * dx + q.r21 * dy + q.r22 * dz;
+  const Scalar x = vx, y = vy, z = vz + q.t_z;
+  const Scalar gx = q.a * x + q.b * y, gy = q.b * x + q.c * y;
+  return {Scalar(0.5) * (gx * x + gy * y) - z,  // ½ (a x² + 2 b x y + c y²) − z
+          -gy * vz - vy,                        // g·(0, −v_z, v_y)
+          gx * vz + vx,                         // g·(v_z, 0, −v_x)
+          Scalar(-1),
+          Scalar(0.5) * x * x,
+          x * y,
+          Scalar(0.5) * y * y,
+          vx,
+          vy,
+          vz,
+          gx,
+          gy};
+}
+
 template <typename Scalar>
 JPCR_HD QuadricLinearization<Scalar> linearize_quadric(const QuadricT<Scalar>& q,
                                                        const Eigen::Matrix<Scalar, 3, 1>& X) {
+  const SampleLinearization<Scalar> s =
+      linearize_sample(QuadricScalars<Scalar>::from(q), X.x() - q.center.x(), X.y() - q.center.y(),
+                       X.z() - q.center.z());
   QuadricLinearization<Scalar> l;
-  l.v = q.R * (X - q.center);
-  const Scalar x = l.v.x(), y = l.v.y(), z = l.v.z() + q.t_z;
-  l.r = Scalar(0.5) * (q.a * x * x + Scalar(2) * q.b * x * y + q.c * y * y) - z;
-  l.g = Eigen::Matrix<Scalar, 3, 1>(q.a * x + q.b * y, q.b * x + q.c * y, Scalar(-1));
-  l.J(0) = -l.g.y() * l.v.z() + l.g.z() * l.v.y();
-  l.J(1) = l.g.x() * l.v.z() - l.g.z() * l.v.x();
-  l.J(2) = Scalar(-1);
-  l.J(3) = Scalar(0.5) * x * x;
-  l.J(4) = x * y;
-  l.J(5) = Scalar(0.5) * y * y;
+  l.r = s.r;
+  l.v = Eigen::Matrix<Scalar, 3, 1>(s.vx, s.vy, s.vz);
+  l.g = Eigen::Matrix<Scalar, 3, 1>(s.gx, s.gy, Scalar(-1));
+  l.J << s.J0, s.J1, s.J2, s.J3, s.J4, s.J5;
   return l;
 }
 
