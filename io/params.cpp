@@ -75,6 +75,7 @@ Params parse_params(const std::string& text, const std::string& path) {
   Params params;
   read_dataset(yaml.section("dataset"), params.dataset);
   read_synthetic(yaml.section("synthetic"), params.synthetic);
+  read_dds_config(yaml.section("dds"), params.dds);
   yaml.finish();
   return params;
 }

@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "jpcr/io/dds/dds_config.hpp"
 #include "jpcr/io/synthetic_noise.hpp"
 #include "jpcr/io/synthetic_trajectory.hpp"
 
@@ -23,6 +24,7 @@ struct SyntheticParams {
 struct Params {
   DatasetParams dataset;
   SyntheticParams synthetic;
+  DdsConfig dds;  // section `dds:` (io/dds/dds_config.hpp)
 };
 
 /// Loads a parameter file; absent keys keep their defaults. Throws InputError naming the file,
