@@ -31,6 +31,10 @@ int DdsDepthPublisher::matched() const {
   return writers_->depth.matched();
 }
 
+bool DdsDepthPublisher::flush(std::chrono::milliseconds timeout) const {
+  return writers_->camera_info.wait_for_acks(timeout) && writers_->depth.wait_for_acks(timeout);
+}
+
 bool DdsDepthPublisher::wait_for_subscribers(int count, std::chrono::milliseconds timeout) const {
   return writers_->depth.wait_matched(count, timeout) &&
          writers_->camera_info.wait_matched(count, timeout);

@@ -24,6 +24,8 @@ class DdsDepthPublisher {
   void publish(const Frame& frame);
   /// Subscribers matched on the depth topic.
   int matched() const;
+  /// Waits until reliable subscribers acknowledged every frame (call before exiting).
+  bool flush(std::chrono::milliseconds timeout) const;
   /// Waits until `count` depth subscribers are matched; false on timeout.
   bool wait_for_subscribers(int count, std::chrono::milliseconds timeout) const;
 

@@ -92,6 +92,13 @@ bool DdsEndpoint::wait_matched(int count, std::chrono::milliseconds timeout) con
   return true;
 }
 
+bool DdsEndpoint::wait_for_acks(std::chrono::milliseconds timeout) const {
+  const dds_return_t r = dds_wait_for_acks(endpoint_.get(), DDS_MSECS(timeout.count()));
+  if (r == DDS_RETCODE_TIMEOUT) return false;
+  check_dds(r, "dds_wait_for_acks(" + name_ + ")");
+  return true;
+}
+
 void DdsEndpoint::write_sample(const void* sample) const {
   check_dds(dds_write(endpoint_.get(), sample), "dds_write(" + name_ + ")");
 }

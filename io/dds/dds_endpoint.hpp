@@ -50,6 +50,8 @@ class DdsEndpoint {
   int matched() const;
   /// Waits until at least `count` endpoints are matched; false on timeout.
   bool wait_matched(int count, std::chrono::milliseconds timeout) const;
+  /// A writer: waits until matched reliable readers acknowledged every sample; false on timeout.
+  bool wait_for_acks(std::chrono::milliseconds timeout) const;
 
  protected:
   void write_sample(const void* sample) const;

@@ -84,6 +84,13 @@ void DdsResultPublisher::publish_path(const Trajectory& trajectory) {
   writers_->path.write(path.message());
 }
 
+bool DdsResultPublisher::flush(std::chrono::milliseconds timeout) const {
+  const Writers& w = *writers_;
+  return w.odometry.wait_for_acks(timeout) && w.keyframe_pose.wait_for_acks(timeout) &&
+         w.path.wait_for_acks(timeout) && w.curvature.wait_for_acks(timeout) &&
+         w.curvature_color.wait_for_acks(timeout);
+}
+
 int DdsResultPublisher::matched(ResultTopic topic) const {
   switch (topic) {
     case ResultTopic::kOdometry:

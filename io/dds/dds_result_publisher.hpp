@@ -11,6 +11,7 @@
 // camera_frame_id. Thread-compatible: one thread per publisher.
 #pragma once
 
+#include <chrono>
 #include <memory>
 #include <string>
 
@@ -49,6 +50,9 @@ class DdsResultPublisher {
                         const ColorImage& color);
   /// The refined trajectory (all keyframes); late subscribers receive the last one.
   void publish_path(const Trajectory& trajectory);
+
+  /// Waits until reliable readers acknowledged every sample of every topic (before exiting).
+  bool flush(std::chrono::milliseconds timeout) const;
 
   /// Readers matched on `topic` (for logs and for waiting in tests).
   int matched(ResultTopic topic) const;

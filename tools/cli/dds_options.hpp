@@ -1,0 +1,16 @@
+// The DDS options the jpcr DDS programs share: --params FILE (its dds: section) and --domain N.
+#pragma once
+
+#include "cli/arguments.hpp"
+#include "jpcr/io/dds/dds_config.hpp"
+
+namespace jpcr::cli {
+
+/// Declares --params and --domain on `args`.
+void add_dds_options(Arguments& args);
+
+/// The dds: section of --params (defaults without it), with --domain applied. The Cyclone
+/// configuration comes from dds.cyclone_uri, else $CYCLONEDDS_URI.
+DdsConfig dds_config_from(const Arguments& args);
+
+}  // namespace jpcr::cli
