@@ -261,5 +261,23 @@ TEST(DdsConfig, YamlSectionMapsOntoTheStruct) {
             "<no error>");
 }
 
+TEST(DdsConfig, DefaultYamlStatesTheBuiltInDefaults) {
+  const DdsConfig shipped =
+      load_params(std::string(JPCR_SOURCE_DIR) + "/configs/default.yaml").dds;
+  const DdsConfig built_in;
+  EXPECT_EQ(shipped.domain_id, built_in.domain_id);
+  EXPECT_EQ(shipped.cyclone_uri, built_in.cyclone_uri);
+  EXPECT_EQ(shipped.topic_prefix, built_in.topic_prefix);
+  EXPECT_EQ(shipped.depth_topic, built_in.depth_topic);
+  EXPECT_EQ(shipped.camera_info_topic, built_in.camera_info_topic);
+  EXPECT_EQ(shipped.world_frame_id, built_in.world_frame_id);
+  EXPECT_EQ(shipped.camera_frame_id, built_in.camera_frame_id);
+  EXPECT_EQ(shipped.history_depth, built_in.history_depth);
+  EXPECT_EQ(shipped.image_history_depth, built_in.image_history_depth);
+  EXPECT_EQ(shipped.input_reliable, built_in.input_reliable);
+  EXPECT_EQ(shipped.max_image_megabytes, built_in.max_image_megabytes);
+  EXPECT_EQ(shipped.max_image_side, built_in.max_image_side);
+}
+
 }  // namespace
 }  // namespace jpcr
