@@ -57,8 +57,6 @@ DdsEndpoint::DdsEndpoint(const DdsParticipant& participant, const std::string& t
     endpoint_ =
         DdsEntity(check_dds(dds_create_writer(participant.handle(), topic_.get(), q.get(), nullptr),
                             "dds_create_writer(" + topic + ")"));
-    check_dds(dds_set_status_mask(endpoint_.get(), DDS_PUBLICATION_MATCHED_STATUS),
-              "dds_set_status_mask(" + topic + ")");
     return;
   }
   endpoint_ =

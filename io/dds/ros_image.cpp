@@ -217,7 +217,8 @@ Frame decode_depth_frame(const RosImageView& image, const RosStamp& stamp,
 Image<Eigen::Vector2f> decode_curvature_image(const RosImageView& image,
                                               const RosImageLimits& limits) {
   check_image_layout(image, {{"32FC2", 8}}, limits);
-  Image<Eigen::Vector2f> out(static_cast<int>(image.width), static_cast<int>(image.height));
+  Image<Eigen::Vector2f> out(static_cast<int>(image.width), static_cast<int>(image.height),
+                             Eigen::Vector2f::Zero());
   read_rows<float>(
       image, 2, [](float k, float* o) { *o = k; }, out.data()->data());
   return out;

@@ -109,7 +109,7 @@ TEST(DdsProcesses, CurvatureMapRoundTripsThroughAnotherProcess) {
 
   std::mt19937 rng(11);
   std::uniform_real_distribution<float> uniform(-50.0f, 50.0f);
-  Image<Eigen::Vector2f> k(640, 480);
+  Image<Eigen::Vector2f> k(640, 480, Eigen::Vector2f::Zero());
   for (std::size_t i = 0; i < k.size(); ++i)
     k[i] =
         i % 5 == 0 ? Eigen::Vector2f::Constant(NAN) : Eigen::Vector2f(uniform(rng), uniform(rng));

@@ -139,7 +139,7 @@ TEST_F(DdsResults, CurvatureMap640x480ArrivesBitExact) {
   }));
   std::mt19937 rng(5);
   std::normal_distribution<float> normal(0.0f, 3.0f);
-  Image<Eigen::Vector2f> k(640, 480);
+  Image<Eigen::Vector2f> k(640, 480, Eigen::Vector2f::Zero());
   ColorImage c(640, 480);
   for (std::size_t i = 0; i < k.size(); ++i) {
     k[i] = i % 17 == 0 ? Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN())

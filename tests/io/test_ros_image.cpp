@@ -87,7 +87,7 @@ TEST(RosImage, InvalidDepthsBecomeZero) {
 }
 
 TEST(RosImage, CurvatureAndColourRoundTripBitExact) {
-  Image<Eigen::Vector2f> k(6, 4);
+  Image<Eigen::Vector2f> k(6, 4, Eigen::Vector2f::Zero());
   for (std::size_t i = 0; i < k.size(); ++i)
     k[i] = Eigen::Vector2f(1.0f / (1.0f + i), -0.25f * i);
   k[3] = Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
