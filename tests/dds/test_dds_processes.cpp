@@ -4,6 +4,7 @@
 //   - a 640x480 32FC2 map goes to a relay process (this binary run with --relay) and back
 //     bit-exact.
 // This file has the test binary's main(): with --relay it relays instead of running tests.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
 #include <spawn.h>
@@ -18,6 +19,7 @@
 #include "dds_test_config.hpp"
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/dds/dds_depth_subscriber.hpp"
+#include "jpcr/io/dds/dds_result_publisher.hpp"
 #include "jpcr/io/dds/ros_messages.hpp"
 #include "jpcr/io/open_dataset.hpp"
 
@@ -30,15 +32,22 @@ using std::chrono::milliseconds;
 const std::string kTumDir = std::string(JPCR_TEST_DATA_DIR) + "/tum_fr1_xyz_20";
 const std::string kFr1 = std::string(JPCR_SOURCE_DIR) + "/configs/tum_fr1.yaml";
 
-// A child process, killed and reaped on destruction unless it ended.
+// A child process, killed and reaped on destruction unless it ended; stdout optionally to a file.
 class Child {
  public:
-  explicit Child(const std::vector<std::string>& argv) {
+  explicit Child(const std::vector<std::string>& argv, const std::string& stdout_file = "") {
     std::vector<char*> args;
     for (const std::string& a : argv)
       args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
-    if (posix_spawn(&pid_, args[0], nullptr, nullptr, args.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    if (!stdout_file.empty()) {
+      posix_spawn_file_actions_addopen(&actions, 1, stdout_file.c_str(),
+                                       O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    }
+    if (posix_spawn(&pid_, args[0], &actions, nullptr, args.data(), environ) != 0) pid_ = -1;
+    posix_spawn_file_actions_destroy(&actions);
   }
   ~Child() {
     if (pid_ <= 0) return;
@@ -126,6 +135,53 @@ TEST(DdsProcesses, CurvatureMapRoundTripsThroughAnotherProcess) {
       milliseconds(10000)));
   EXPECT_EQ(std::memcmp(got->data(), k.data(), k.size() * sizeof(Eigen::Vector2f)), 0);
   EXPECT_EQ(relay.wait(), 0);
+}
+
+std::string read_text(const std::string& path) {
+  std::ifstream in(path);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+// jpcr_dds_echo in another process: joins after the path was published and still gets it
+// (transient local), then prints the odometry published once it is matched.
+TEST(DdsProcesses, EchoReceivesTheLastPathAsLateJoinerAndOdometry) {
+  const std::string echo = std::string(JPCR_BINARY_DIR) + "/tools/jpcr_dds_echo";
+  if (!std::filesystem::exists(echo)) GTEST_SKIP() << echo << " not built";
+  const DdsConfig config = test::loopback_dds_config("echo");
+  const DdsParticipant participant(config);
+  DdsResultPublisher publisher(participant, config);
+  Trajectory path;
+  for (int i = 0; i < 4; ++i) {
+    Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+    T.translation() = Eigen::Vector3d(0.5 * i, -1.0, 2.0);
+    path.push_back(StampedPose{100.0 + i, T});
+  }
+  publisher.publish_path(path);
+  const std::string out_path = std::filesystem::temp_directory_path() /
+                               ("jpcr_dds_echo_" + std::to_string(getpid()) + ".txt");
+  const std::string domain = std::to_string(config.domain_id);
+  Child path_echo({echo, result_topic_name(config, ResultTopic::kPath), "--domain", domain,
+                   "--cyclone-uri", config.cyclone_uri, "--count", "1", "--timeout", "10"},
+                  out_path);
+  ASSERT_TRUE(path_echo.started());
+  EXPECT_EQ(path_echo.wait(), 0);
+  EXPECT_EQ(read_text(out_path),
+            "path stamp=103.000000000 frame=map poses=4 last position=[1.5000 -1.0000 2.0000] "
+            "orientation=[0.0000 0.0000 0.0000 1.0000]\n");
+
+  Child odom_echo({echo, result_topic_name(config, ResultTopic::kOdometry), "--domain", domain,
+                   "--cyclone-uri", config.cyclone_uri, "--count", "1", "--timeout", "10"},
+                  out_path);
+  ASSERT_TRUE(odom_echo.started());
+  ASSERT_TRUE(test::eventually([&] { return publisher.matched(ResultTopic::kOdometry) == 1; },
+                               milliseconds(10000)));
+  publisher.publish_odometry(path.back(), Matrix6d::Identity() * 0.25);
+  EXPECT_EQ(odom_echo.wait(), 0);
+  EXPECT_EQ(read_text(out_path),
+            "odom stamp=103.000000000 frame=map child=camera_depth_optical_frame "
+            "position=[1.5000 -1.0000 2.0000] orientation=[0.0000 0.0000 0.0000 1.0000] "
+            "cov_diag=[0.25 0.25 0.25 0.25 0.25 0.25]\n");
+  std::filesystem::remove(out_path);
 }
 
 // The relay: forwards one image from topic FROM to topic TO, then exits 0 (1 after 20 s).

@@ -6,7 +6,10 @@ namespace jpcr::cli {
 
 void add_dds_options(Arguments& args) {
   args.option("params", "parameter YAML whose dds: section sets domain, topics and QoS")
-      .option("domain", "DDS domain id 0..232 (overrides dds.domain_id)");
+      .option("domain", "DDS domain id 0..232 (overrides dds.domain_id)")
+      .option("cyclone-uri",
+              "Cyclone DDS configuration, file://PATH or XML (overrides dds.cyclone_uri and "
+              "$CYCLONEDDS_URI; configs/cyclonedds_loopback.xml keeps traffic on this machine)");
 }
 
 DdsConfig dds_config_from(const Arguments& args) {
@@ -17,6 +20,7 @@ DdsConfig dds_config_from(const Arguments& args) {
       throw UsageError("--domain must be in 0..232, got " + args.get("domain"));
     }
   }
+  if (args.has("cyclone-uri")) config.cyclone_uri = args.get("cyclone-uri");
   return config;
 }
 
