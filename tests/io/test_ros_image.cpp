@@ -262,8 +262,7 @@ TEST(DdsConfig, YamlSectionMapsOntoTheStruct) {
 }
 
 TEST(DdsConfig, DefaultYamlStatesTheBuiltInDefaults) {
-  const DdsConfig shipped =
-      load_params(std::string(JPCR_SOURCE_DIR) + "/configs/default.yaml").dds;
+  const DdsConfig shipped = load_params(std::string(JPCR_SOURCE_DIR) + "/configs/default.yaml").dds;
   const DdsConfig built_in;
   EXPECT_EQ(shipped.domain_id, built_in.domain_id);
   EXPECT_EQ(shipped.cyclone_uri, built_in.cyclone_uri);
