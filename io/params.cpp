@@ -105,6 +105,7 @@ Params parse_params(const std::string& text, const std::string& path) {
   read_dataset(yaml.section("dataset"), params.dataset);
   read_synthetic(yaml.section("synthetic"), params.synthetic);
   read_quadric(yaml.section("quadric"), params.quadric);
+  read_dds_config(yaml.section("dds"), params.dds);
   yaml.finish();
   return params;
 }

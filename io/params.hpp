@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "jpcr/io/dds/dds_config.hpp"
 #include "jpcr/io/synthetic_noise.hpp"
 #include "jpcr/io/synthetic_trajectory.hpp"
 #include "jpcr/quadric/quadric_params.hpp"
@@ -25,6 +26,7 @@ struct Params {
   DatasetParams dataset;
   SyntheticParams synthetic;
   QuadricParams quadric;  // section `quadric:` (pattern, normals, Quad IT)
+  DdsConfig dds;  // section `dds:` (io/dds/dds_config.hpp)
 };
 
 /// Loads a parameter file; absent keys keep their defaults. Throws InputError naming the file,
