@@ -40,12 +40,14 @@ class GatheredFit {
     q.R = local_frame<double>(normal.cast<double>().normalized());
     const SampleGate<double> limits = SampleGate<double>::at(p, centre.cast<double>());
     const float gate = static_cast<float>(limits.gate), n0 = static_cast<float>(limits.n0);
-    for (int it = 0; it < p.iterations; ++it) {
+    Quadricd previous = q;
+    double previous_cost = INFINITY;
+    for (int it = 0; it <= p.iterations; ++it) {
       const QuadricScalars<float> qs = QuadricScalars<float>::from(q.cast<float>());
       const float *dx = array(0), *dy = array(1), *dz = array(2), *d2 = array(3), *m = array(4);
       // The 21 + 6 sums of the normal equations (lower triangle of Σ w JᵀJ, Σ w J r) and the
       // gated count, accumulated per SIMD lane over blocks of kLanes samples.
-      float acc[28][kLanes] = {};
+      float acc[29][kLanes] = {};
       for (int k0 = 0; k0 < n; k0 += kLanes) {
         for (int lane = 0; lane < kLanes; ++lane) {
           const int k = k0 + lane;
@@ -81,6 +83,7 @@ class GatheredFit {
           acc[25][lane] += w * J[4] * l.r;
           acc[26][lane] += w * J[5] * l.r;
           acc[27][lane] += inside;
+          acc[28][lane] += w * l.r * l.r;
         }
       }
       NormalEquations6<double> ne;
@@ -119,7 +122,15 @@ class GatheredFit {
       ne.g(4) = total(25);
       ne.g(5) = total(26);
       sum = static_cast<int>(total(27));
+      const double cost = total(28) / std::max(1, sum);
+      if (cost > previous_cost) {  // the last step made the fit worse: undo it and stop
+        q = previous;
+        break;
+      }
+      if (it == p.iterations) break;  // one pass more than steps: it checks the last one
       if (sum < p.min_samples) return QuadricStatus::kTooFewSamples;
+      previous = q;
+      previous_cost = cost;
       Eigen::Matrix<double, 6, 1> delta;
       if (!solve_damped_step(ne, p.damping, delta)) return QuadricStatus::kSingular;
       apply_quadric_update(q, QuadricVector<double>(delta));

@@ -135,7 +135,9 @@ JPCR_HD bool step_converged(const Eigen::Matrix<double, 6, 1>& delta, const Quad
 }
 
 /// Quad IT at pixel (u, v): starts from the plane of `normal` at p̄ = vertices(u, v) and runs up
-/// to p.iterations Gauss-Newton steps. On kValid, q holds the fitted quadric.
+/// to p.iterations Gauss-Newton steps. A step is kept only if it does not raise the mean
+/// weighted cost Σ w r² / n (the Levenberg-Marquardt safeguard; under range noise the undamped
+/// rotation steps can overshoot). On kValid, q holds the fitted quadric.
 template <typename Scalar>
 JPCR_HD QuadricStatus fit_quadric_pixel(const VertexView& vertices, const PixelOffset* pattern,
                                         int pattern_size, int u, int v,
@@ -147,10 +149,21 @@ JPCR_HD QuadricStatus fit_quadric_pixel(const VertexView& vertices, const PixelO
   q.R = local_frame<Scalar>(normal.template cast<Scalar>().normalized());
   q.center = centre.template cast<Scalar>();
   q.t_z = q.a = q.b = q.c = Scalar(0);
-  for (int it = 0; it < p.iterations; ++it) {
+  QuadricT<Scalar> previous = q;
+  double previous_cost = 1e300;
+  // One pass more than steps: the last pass only checks the last step's cost.
+  for (int it = 0; it <= p.iterations; ++it) {
     NormalEquations6<Scalar> ne;
     accumulate_quadric_samples(q, vertices, pattern, pattern_size, u, v, p, ne);
+    const double cost = double(ne.cost) / (ne.count > 0 ? ne.count : 1);
+    if (cost > previous_cost) {  // the last step made the fit worse: undo it and stop
+      q = previous;
+      break;
+    }
+    if (it == p.iterations) break;
     if (ne.count < p.min_samples) return QuadricStatus::kTooFewSamples;
+    previous = q;
+    previous_cost = cost;
     Eigen::Matrix<double, 6, 1> delta;
     if (!solve_damped_step(ne, p.damping, delta)) return QuadricStatus::kSingular;
     apply_quadric_update(q, QuadricVector<Scalar>(delta.template cast<Scalar>()));
