@@ -134,6 +134,35 @@ void read_frontend(YamlSection yaml, FrontendParams& p) {
   yaml.finish();
 }
 
+void read_quadric(YamlSection yaml, QuadricParams& p) {
+  YamlSection pattern = yaml.section("pattern");
+  pattern.read("radius", p.pattern.radius);
+  pattern.read("stride", p.pattern.stride);
+  pattern.read("reference_width", p.pattern.reference_width);
+  pattern.finish();
+  validate_in(pattern, p.pattern);
+  YamlSection normals = yaml.section("normals");
+  normals.read("half_window", p.normals.half_window);
+  normals.read("min_points", p.normals.min_points);
+  normals.read("max_depth_jump", p.normals.max_depth_jump);
+  normals.finish();
+  validate_in(normals, p.normals);
+  YamlSection fit = yaml.section("fit");
+  fit.read("iterations", p.fit.iterations);
+  fit.read("fair_n0", p.fit.fair_n0);
+  fit.read("residual_gate", p.fit.residual_gate);
+  fit.read("fair_n0_per_range", p.fit.fair_n0_per_range);
+  fit.read("gate_per_range", p.fit.gate_per_range);
+  fit.read("damping", p.fit.damping);
+  fit.read("min_samples", p.fit.min_samples);
+  fit.read("angle_tolerance", p.fit.angle_tolerance);
+  fit.read("offset_tolerance", p.fit.offset_tolerance);
+  fit.read("curvature_tolerance", p.fit.curvature_tolerance);
+  fit.finish();
+  validate_in(fit, p.fit);
+  yaml.finish();
+}
+
 }  // namespace
 
 Params load_params(const std::string& path) {
@@ -146,6 +175,8 @@ Params parse_params(const std::string& text, const std::string& path) {
   read_dataset(yaml.section("dataset"), params.dataset);
   read_synthetic(yaml.section("synthetic"), params.synthetic);
   read_frontend(yaml.section("frontend"), params.frontend);
+  read_quadric(yaml.section("quadric"), params.quadric);
+  read_dds_config(yaml.section("dds"), params.dds);
   yaml.finish();
   return params;
 }

@@ -5,8 +5,10 @@
 #include <string>
 
 #include "jpcr/frontend/frontend_params.hpp"
+#include "jpcr/io/dds/dds_config.hpp"
 #include "jpcr/io/synthetic_noise.hpp"
 #include "jpcr/io/synthetic_trajectory.hpp"
+#include "jpcr/quadric/quadric_params.hpp"
 
 namespace jpcr {
 
@@ -25,6 +27,8 @@ struct Params {
   DatasetParams dataset;
   SyntheticParams synthetic;
   FrontendParams frontend;  // section `frontend:` (jpcr_odometry, the tracker)
+  QuadricParams quadric;  // section `quadric:` (pattern, normals, Quad IT)
+  DdsConfig dds;  // section `dds:` (io/dds/dds_config.hpp)
 };
 
 /// Loads a parameter file; absent keys keep their defaults. Throws InputError naming the file,

@@ -18,7 +18,6 @@
 
 namespace jpcr {
 
-using CurvatureImage = Image<Eigen::Vector2f>;
 
 struct SyntheticFrame {
   /// Timestamp, noisy depth (m, 0 = no measurement), the camera, and colour shaded by normal.

@@ -13,6 +13,8 @@ namespace jpcr {
 
 using VertexMap = Image<Eigen::Vector3f>;
 using NormalMap = Image<Eigen::Vector3f>;
+/// Principal curvatures κ₁ ≥ κ₂ per pixel (1/m); NaN where there is no value.
+using CurvatureImage = Image<Eigen::Vector2f>;
 
 /// A vertex or normal is valid when it is finite (invalid entries are all-NaN).
 inline bool is_valid(const Eigen::Vector3f& x) {

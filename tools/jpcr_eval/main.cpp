@@ -13,7 +13,9 @@ constexpr const char* kUsage =
     "Evaluates jpcr results against ground truth.\n\n"
     "commands:\n"
     "  traj        trajectory error: ATE, RPE per frame and per second, paper-style relative\n"
-    "              errors and drift (jpcr_eval traj --gt GT.txt --est EST.txt [--json])\n\n"
+    "              errors and drift (jpcr_eval traj --gt GT.txt --est EST.txt [--json])\n"
+    "  curvature   principal-curvature RMS error and coverage against jpcr_synth ground truth\n"
+    "              (jpcr_eval curvature --gt DIR --est DIR [--json])\n\n"
     "Run 'jpcr_eval COMMAND --help' for the options of a command.\n";
 
 }  // namespace
@@ -25,6 +27,7 @@ int main(int argc, char** argv) {
   }
   const std::string command = argv[1];
   if (command == "traj") return jpcr::eval::run_trajectory(argc - 1, argv + 1);
+  if (command == "curvature") return jpcr::eval::run_curvature(argc - 1, argv + 1);
   std::cerr << "jpcr_eval: unknown command '" << command << "'\n" << kUsage;
   return 2;
 }

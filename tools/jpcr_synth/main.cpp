@@ -1,6 +1,5 @@
 // jpcr_synth: ray-traced synthetic RGB-D sequences with exact pose and curvature ground truth,
 // written in the TUM layout (io/synthetic_writer.hpp).
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdio>
@@ -8,6 +7,7 @@
 #include <sstream>
 
 #include "cli/arguments.hpp"
+#include "cli/progress.hpp"
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/params.hpp"
 #include "jpcr/io/synthetic_writer.hpp"
@@ -35,25 +35,6 @@ std::string scene_list() {
     list += (list.empty() ? "" : ", ") + name;
   return list.empty() ? "(none found)" : list;
 }
-
-// A progress line: rewritten in place on a terminal, every 10 % otherwise (logs stay short).
-class Progress {
- public:
-  explicit Progress(Clock::time_point start) : start_(start), terminal_(isatty(2) != 0) {}
-
-  void operator()(std::size_t done, std::size_t total) {
-    const bool tenth = done * 10 / total != (done - 1) * 10 / total;
-    if (!terminal_ && !tenth && done != total) return;
-    const double seconds = std::chrono::duration<double>(Clock::now() - start_).count();
-    std::fprintf(stderr, "%sjpcr_synth: frame %zu/%zu  %.1f s  %.1f frames/s%s",
-                 terminal_ ? "\r" : "", done, total, seconds, done / std::max(seconds, 1e-9),
-                 terminal_ && done != total ? "" : "\n");
-  }
-
- private:
-  Clock::time_point start_;
-  bool terminal_;
-};
 
 int run(int argc, char** argv) {
   cli::Arguments args(
@@ -119,7 +100,8 @@ int run(int argc, char** argv) {
     SyntheticWriterOptions writer;
     writer.force = args.get_flag("force");
     writer.comment = command.str();
-    writer.progress = Progress(start);
+    cli::Progress progress("jpcr_synth", start);
+    writer.progress = [&progress](std::size_t done, std::size_t total) { progress(done, total); };
     write_synthetic_sequence(sequence, args.get("out"), writer);
     std::cout << "wrote " << sequence.size() << " frames to " << args.get("out") << " in "
               << std::chrono::duration<double>(Clock::now() - start).count() << " s\n";

@@ -1,0 +1,34 @@
+// Writers and readers of curvature results:
+//   - .npy float32 H×W×2 (κ₁, κ₂ in 1/m, NaN where invalid), read by numpy.load and jpcr_eval;
+//   - a colour PNG with its key (curvature_colors.hpp) and text labels;
+//   - a binary PLY point cloud with κ₁, κ₂ as vertex properties, the refined normals and the
+//     curvature colour, for CloudCompare and MeshLab.
+// Every file is written atomically.
+#pragma once
+
+#include <string>
+
+#include "jpcr/io/curvature_colors.hpp"
+#include "jpcr/quadric/quadric_map.hpp"
+
+namespace jpcr {
+
+void write_curvature_npy(const std::string& path, const CurvatureImage& curvature);
+
+/// Reads an H×W×2 float (or double) .npy; throws InputError naming the file when its shape is not
+/// H×W×2.
+CurvatureImage read_curvature_npy(const std::string& path);
+
+/// Vertices with a valid quadric: x y z (m, camera frame), nx ny nz, k1 k2 (1/m), red green blue.
+void write_curvature_ply(const std::string& path, const VertexMap& vertices, const QuadricMap& map,
+                         const CurvatureColorParams& colors = {});
+
+/// The PLY bytes (binary little-endian), for tests.
+std::string format_curvature_ply(const VertexMap& vertices, const QuadricMap& map,
+                                 const CurvatureColorParams& colors = {});
+
+/// The colour map with its key and labels as PNG (OpenCV; full profile only).
+void save_curvature_png(const std::string& path, const CurvatureImage& curvature,
+                        const CurvatureColorParams& colors = {});
+
+}  // namespace jpcr

@@ -1,0 +1,38 @@
+// save_curvature_png (curvature_output.hpp): the colour map with its key and OpenCV text labels.
+#include <cstdio>
+
+#include <opencv2/imgproc.hpp>
+
+#include "jpcr/io/curvature_output.hpp"
+#include "jpcr/io/depth_png.hpp"
+
+namespace jpcr {
+
+namespace {
+
+void label(ColorImage& image, const std::string& text, int x, int y, double size) {
+  cv::Mat mat(image.height(), image.width(), CV_8UC3, image.data());  // shares the pixels
+  cv::putText(mat, text, {x, y}, cv::FONT_HERSHEY_SIMPLEX, size, cv::Scalar(0, 0, 0), 3,
+              cv::LINE_AA);
+  cv::putText(mat, text, {x, y}, cv::FONT_HERSHEY_SIMPLEX, size, cv::Scalar(255, 255, 255), 1,
+              cv::LINE_AA);
+}
+
+}  // namespace
+
+void save_curvature_png(const std::string& path, const CurvatureImage& curvature,
+                        const CurvatureColorParams& colors) {
+  ColorImage image = render_curvature(curvature, colors);
+  const KeyPlacement key = key_placement(image.width(), image.height(), colors);
+  if (key.size >= 64) {
+    const double size = key.size / 240.0;
+    char range[64];
+    std::snprintf(range, sizeof range, "+-%g 1/m", colors.scale);
+    label(image, "k2 ->", key.x0 + key.size / 2, key.y0 + key.size - 6, size);
+    label(image, "k1", key.x0 + 4, key.y0 + key.size / 6, size);
+    label(image, range, key.x0 + 4, key.y0 + key.size / 2 + key.size / 8, size);
+  }
+  save_color_png(path, image);
+}
+
+}  // namespace jpcr

@@ -1,0 +1,48 @@
+// Section `dds:` of the parameter file: where jpcr talks DDS (domain, Cyclone configuration),
+// under which topic names, with which QoS, and how large an input image may claim to be. A plain
+// struct so that the core profile (no Cyclone DDS) still parses every parameter file.
+#pragma once
+
+#include <cstddef>
+#include <string>
+
+namespace jpcr {
+
+class YamlSection;
+
+/// The QoS of one topic, in ROS terms (plain values; io/dds/dds_endpoint.hpp applies them).
+struct DdsQos {
+  bool reliable = true;          // RELIABLE (ROS default) or BEST_EFFORT (ROS sensor data)
+  bool transient_local = false;  // TRANSIENT_LOCAL: late joiners get the last `depth` samples
+  int depth = 10;                // samples, KEEP_LAST history
+};
+
+struct DdsConfig {
+  int domain_id = 0;        // DDS domain (ROS_DOMAIN_ID), 0..232
+  std::string cyclone_uri;  // Cyclone config: "file://PATH" or XML; empty: $CYCLONEDDS_URI
+  std::string topic_prefix = "rt/jpcr/";  // published topics are PREFIX + odom, path, ...
+  std::string depth_topic = "rt/camera/depth/image_raw";          // input sensor_msgs/Image
+  std::string camera_info_topic = "rt/camera/depth/camera_info";  // input sensor_msgs/CameraInfo
+  std::string world_frame_id = "map";                             // header.frame_id of poses
+  std::string camera_frame_id = "camera_depth_optical_frame";     // odom child, image frames
+  int history_depth = 10;             // samples, KEEP_LAST depth of the volatile topics
+  int image_history_depth = 2;        // samples, KEEP_LAST depth of image topics (MB each)
+  bool input_reliable = true;         // depth input QoS: reliable (ROS default) or best effort
+  double max_image_megabytes = 64.0;  // MiB, larger claimed images are rejected unread
+  int max_image_side = 16384;         // pixels, larger claimed width or height is rejected
+
+  /// Throws InputError "field: problem" on a value out of range.
+  void validate() const;
+
+  /// max_image_megabytes in bytes.
+  std::size_t max_image_bytes() const;
+
+  /// QoS of the depth input and its camera_info (input_reliable, volatile).
+  DdsQos depth_qos() const { return DdsQos{input_reliable, false, image_history_depth}; }
+  DdsQos camera_info_qos() const { return DdsQos{input_reliable, false, history_depth}; }
+};
+
+/// Reads a `dds:` section onto `config` (absent keys keep their value) and validates it.
+void read_dds_config(YamlSection yaml, DdsConfig& config);
+
+}  // namespace jpcr

@@ -1,0 +1,43 @@
+#include "jpcr/io/dds/dds_depth_publisher.hpp"
+
+#include "jpcr/io/dds/ros_messages.hpp"
+
+namespace jpcr {
+
+struct DdsDepthPublisher::Writers {
+  Writers(const DdsParticipant& p, const DdsConfig& c)
+      : camera_info(p, c.camera_info_topic, c.camera_info_qos()),
+        depth(p, c.depth_topic, c.depth_qos()) {}
+  DdsWriter<RosCameraInfoMsg> camera_info;
+  DdsWriter<RosImage> depth;
+};
+
+DdsDepthPublisher::DdsDepthPublisher(const DdsParticipant& participant, const DdsConfig& config,
+                                     DepthEncoding encoding)
+    : config_(config),
+      encoding_(encoding),
+      writers_(std::make_unique<Writers>(participant, config)) {}
+
+DdsDepthPublisher::~DdsDepthPublisher() = default;
+
+void DdsDepthPublisher::publish(const Frame& frame) {
+  const RosCameraInfo info = encode_camera_info(frame.camera);
+  writers_->camera_info.write(camera_info_message(info, frame.timestamp, config_.camera_frame_id));
+  const RosImageBuffer depth = encode_depth_image(frame.depth, encoding_);
+  writers_->depth.write(image_message(depth, frame.timestamp, config_.camera_frame_id));
+}
+
+int DdsDepthPublisher::matched() const {
+  return writers_->depth.matched();
+}
+
+bool DdsDepthPublisher::flush(std::chrono::milliseconds timeout) const {
+  return writers_->camera_info.wait_for_acks(timeout) && writers_->depth.wait_for_acks(timeout);
+}
+
+bool DdsDepthPublisher::wait_for_subscribers(int count, std::chrono::milliseconds timeout) const {
+  return writers_->depth.wait_matched(count, timeout) &&
+         writers_->camera_info.wait_matched(count, timeout);
+}
+
+}  // namespace jpcr

@@ -1,0 +1,39 @@
+// Publishes depth frames the way a ROS 2 depth camera driver does: sensor_msgs/CameraInfo on
+// DdsConfig::camera_info_topic, then sensor_msgs/Image (16UC1 mm or 32FC1 m) on depth_topic, with
+// the same stamp and camera_frame_id. Used by jpcr_dds_play and the tests.
+#pragma once
+
+#include <chrono>
+#include <memory>
+
+#include "jpcr/io/dds/dds_config.hpp"
+#include "jpcr/io/dds/dds_participant.hpp"
+#include "jpcr/io/dds/ros_image.hpp"
+#include "jpcr/quadric/frame.hpp"
+
+namespace jpcr {
+
+class DdsDepthPublisher {
+ public:
+  DdsDepthPublisher(const DdsParticipant& participant, const DdsConfig& config,
+                    DepthEncoding encoding);
+  ~DdsDepthPublisher();
+  DdsDepthPublisher(const DdsDepthPublisher&) = delete;
+  DdsDepthPublisher& operator=(const DdsDepthPublisher&) = delete;
+
+  void publish(const Frame& frame);
+  /// Subscribers matched on the depth topic.
+  int matched() const;
+  /// Waits until reliable subscribers acknowledged every frame (call before exiting).
+  bool flush(std::chrono::milliseconds timeout) const;
+  /// Waits until `count` depth subscribers are matched; false on timeout.
+  bool wait_for_subscribers(int count, std::chrono::milliseconds timeout) const;
+
+ private:
+  struct Writers;
+  DdsConfig config_;
+  DepthEncoding encoding_;
+  std::unique_ptr<Writers> writers_;
+};
+
+}  // namespace jpcr

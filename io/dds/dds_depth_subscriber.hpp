@@ -1,0 +1,49 @@
+// Receives depth frames from a ROS 2 depth camera: sensor_msgs/Image (16UC1 in mm or 32FC1 in m)
+// on DdsConfig::depth_topic with the latest sensor_msgs/CameraInfo of camera_info_topic. Every
+// sample is checked (io/dds/ros_image.hpp); a bad one is dropped with one line on the log naming
+// the topic and the problem, and reception goes on.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <iosfwd>
+#include <memory>
+#include <optional>
+
+#include "jpcr/io/dds/dds_config.hpp"
+#include "jpcr/io/dds/dds_participant.hpp"
+#include "jpcr/quadric/frame.hpp"
+
+namespace jpcr {
+
+class DdsDepthSubscriber {
+ public:
+  /// `log` receives one line per rejected sample (default std::cerr).
+  DdsDepthSubscriber(const DdsParticipant& participant, const DdsConfig& config,
+                     std::ostream* log = nullptr);
+  ~DdsDepthSubscriber();
+  DdsDepthSubscriber(const DdsDepthSubscriber&) = delete;
+  DdsDepthSubscriber& operator=(const DdsDepthSubscriber&) = delete;
+
+  /// The next valid depth frame, waiting up to `timeout`; nullopt on timeout. A depth image that
+  /// arrives before any camera_info waits (up to image_history_depth of them) for one.
+  std::optional<Frame> wait_frame(std::chrono::milliseconds timeout);
+
+  std::size_t frames_received() const { return frames_; }
+  std::size_t samples_rejected() const { return rejected_; }
+  /// Publishers matched on the depth topic.
+  int matched() const;
+
+ private:
+  struct State;
+  void poll();
+  void reject(const std::string& topic, const std::string& problem);
+
+  DdsConfig config_;
+  std::ostream* log_;
+  std::unique_ptr<State> state_;
+  std::size_t frames_ = 0;
+  std::size_t rejected_ = 0;
+};
+
+}  // namespace jpcr

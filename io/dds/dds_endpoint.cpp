@@ -1,0 +1,109 @@
+#include "jpcr/io/dds/dds_endpoint.hpp"
+
+#include <thread>
+
+namespace jpcr {
+
+namespace {
+
+// A QoS object, owned.
+class Qos {
+ public:
+  explicit Qos(const DdsQos& q) : qos_(dds_create_qos()) {
+    dds_qset_reliability(qos_, q.reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT,
+                         DDS_SECS(1));
+    dds_qset_durability(
+        qos_, q.transient_local ? DDS_DURABILITY_TRANSIENT_LOCAL : DDS_DURABILITY_VOLATILE);
+    dds_qset_history(qos_, DDS_HISTORY_KEEP_LAST, q.depth);
+    const dds_data_representation_id_t xcdr1[] = {DDS_DATA_REPRESENTATION_XCDR1};
+    dds_qset_data_representation(qos_, 1, xcdr1);
+  }
+  ~Qos() { dds_delete_qos(qos_); }
+  Qos(const Qos&) = delete;
+  Qos& operator=(const Qos&) = delete;
+  const dds_qos_t* get() const { return qos_; }
+
+ private:
+  dds_qos_t* qos_;
+};
+
+constexpr std::chrono::milliseconds kMatchPollInterval{5};
+
+}  // namespace
+
+DdsEntity& DdsEntity::operator=(DdsEntity&& other) noexcept {
+  if (this != &other) {
+    reset();
+    handle_ = other.handle_;
+    other.handle_ = 0;
+  }
+  return *this;
+}
+
+void DdsEntity::reset() {
+  if (handle_ > 0) dds_delete(handle_);
+  handle_ = 0;
+}
+
+DdsEndpoint::DdsEndpoint(const DdsParticipant& participant, const std::string& topic,
+                         const dds_topic_descriptor_t& type, const DdsQos& qos, Kind kind)
+    : name_(topic), kind_(kind) {
+  if (qos.depth < 1) throw DdsError("topic " + topic + ": history depth must be at least 1");
+  const Qos q(qos);
+  topic_ = DdsEntity(
+      check_dds(dds_create_topic(participant.handle(), &type, topic.c_str(), nullptr, nullptr),
+                "dds_create_topic(" + topic + ")"));
+  if (kind == Kind::kWriter) {
+    endpoint_ =
+        DdsEntity(check_dds(dds_create_writer(participant.handle(), topic_.get(), q.get(), nullptr),
+                            "dds_create_writer(" + topic + ")"));
+    return;
+  }
+  endpoint_ =
+      DdsEntity(check_dds(dds_create_reader(participant.handle(), topic_.get(), q.get(), nullptr),
+                          "dds_create_reader(" + topic + ")"));
+  condition_ = DdsEntity(check_dds(dds_create_readcondition(endpoint_.get(), DDS_ANY_STATE),
+                                   "dds_create_readcondition(" + topic + ")"));
+  waitset_ = DdsEntity(check_dds(dds_create_waitset(participant.handle()), "dds_create_waitset"));
+  check_dds(dds_waitset_attach(waitset_.get(), condition_.get(), 0), "dds_waitset_attach");
+}
+
+int DdsEndpoint::matched() const {
+  if (kind_ == Kind::kWriter) {
+    dds_publication_matched_status_t status;
+    check_dds(dds_get_publication_matched_status(endpoint_.get(), &status),
+              "dds_get_publication_matched_status(" + name_ + ")");
+    return static_cast<int>(status.current_count);
+  }
+  dds_subscription_matched_status_t status;
+  check_dds(dds_get_subscription_matched_status(endpoint_.get(), &status),
+            "dds_get_subscription_matched_status(" + name_ + ")");
+  return static_cast<int>(status.current_count);
+}
+
+bool DdsEndpoint::wait_matched(int count, std::chrono::milliseconds timeout) const {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (matched() < count) {
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    std::this_thread::sleep_for(kMatchPollInterval);
+  }
+  return true;
+}
+
+bool DdsEndpoint::wait_for_acks(std::chrono::milliseconds timeout) const {
+  const dds_return_t r = dds_wait_for_acks(endpoint_.get(), DDS_MSECS(timeout.count()));
+  if (r == DDS_RETCODE_TIMEOUT) return false;
+  check_dds(r, "dds_wait_for_acks(" + name_ + ")");
+  return true;
+}
+
+void DdsEndpoint::write_sample(const void* sample) const {
+  check_dds(dds_write(endpoint_.get(), sample), "dds_write(" + name_ + ")");
+}
+
+bool DdsEndpoint::wait_data(std::chrono::nanoseconds timeout) const {
+  const dds_return_t n = dds_waitset_wait(waitset_.get(), nullptr, 0, timeout.count());
+  return check_dds(n, "dds_waitset_wait(" + name_ + ")") > 0;
+}
+
+}  // namespace jpcr

@@ -1,0 +1,111 @@
+// Typed DDS writers and readers over Cyclone's C API: DdsWriter<Msg> and DdsReader<Msg> for an
+// idlc-generated C struct Msg whose descriptor DdsType<Msg> names (io/dds/ros_messages.hpp).
+// Topics are keyless and written as XCDR1, which is what ROS 2 (rmw_cyclonedds) expects.
+#pragma once
+
+#include <chrono>
+#include <cstddef>
+#include <string>
+
+#include <dds/dds.h>
+
+#include "jpcr/io/dds/dds_config.hpp"
+#include "jpcr/io/dds/dds_participant.hpp"
+
+namespace jpcr {
+
+/// Maps a generated message type to its topic descriptor; specialised per type.
+template <typename Msg>
+struct DdsType;
+
+/// An owned Cyclone entity (topic, writer, reader, condition, waitset); deleted with its
+/// children on destruction. Movable, not copyable.
+class DdsEntity {
+ public:
+  DdsEntity() = default;
+  explicit DdsEntity(dds_entity_t handle) : handle_(handle) {}
+  ~DdsEntity() { reset(); }
+  DdsEntity(DdsEntity&& other) noexcept : handle_(other.handle_) { other.handle_ = 0; }
+  DdsEntity& operator=(DdsEntity&& other) noexcept;
+  DdsEntity(const DdsEntity&) = delete;
+  DdsEntity& operator=(const DdsEntity&) = delete;
+
+  dds_entity_t get() const { return handle_; }
+  void reset();
+
+ private:
+  dds_entity_t handle_ = 0;
+};
+
+/// A topic plus a writer or a reader on it (the untyped part of DdsWriter and DdsReader).
+class DdsEndpoint {
+ public:
+  enum class Kind { kWriter, kReader };
+  DdsEndpoint(const DdsParticipant& participant, const std::string& topic,
+              const dds_topic_descriptor_t& type, const DdsQos& qos, Kind kind);
+
+  const std::string& topic() const { return name_; }
+  dds_entity_t handle() const { return endpoint_.get(); }
+  /// Matched remote endpoints (readers of a writer, writers of a reader).
+  int matched() const;
+  /// Waits until at least `count` endpoints are matched; false on timeout.
+  bool wait_matched(int count, std::chrono::milliseconds timeout) const;
+  /// A writer: waits until matched reliable readers acknowledged every sample; false on timeout.
+  bool wait_for_acks(std::chrono::milliseconds timeout) const;
+
+ protected:
+  void write_sample(const void* sample) const;
+  /// Waits for data; true when there is some.
+  bool wait_data(std::chrono::nanoseconds timeout) const;
+
+  std::string name_;
+  Kind kind_;
+  DdsEntity topic_, endpoint_, condition_, waitset_;
+};
+
+template <typename Msg>
+class DdsWriter : public DdsEndpoint {
+ public:
+  DdsWriter(const DdsParticipant& participant, const std::string& topic, const DdsQos& qos)
+      : DdsEndpoint(participant, topic, DdsType<Msg>::descriptor(), qos, Kind::kWriter) {}
+  /// Publishes a sample; throws DdsError when Cyclone refuses it.
+  void write(const Msg& sample) const { write_sample(&sample); }
+};
+
+template <typename Msg>
+class DdsReader : public DdsEndpoint {
+ public:
+  DdsReader(const DdsParticipant& participant, const std::string& topic, const DdsQos& qos)
+      : DdsEndpoint(participant, topic, DdsType<Msg>::descriptor(), qos, Kind::kReader) {}
+
+  /// Waits up to `timeout` for samples.
+  bool wait(std::chrono::nanoseconds timeout) const { return wait_data(timeout); }
+
+  /// Takes every available sample and calls on_sample(const Msg&) on each valid one; the sample
+  /// is a loan valid only during the call. Returns the number of valid samples.
+  template <typename OnSample>
+  std::size_t take(OnSample&& on_sample) const {
+    constexpr std::size_t kBatch = 8;  // samples per loan
+    std::size_t valid = 0;
+    for (;;) {
+      void* samples[kBatch] = {};
+      dds_sample_info_t infos[kBatch];
+      const dds_return_t n = dds_take(handle(), samples, infos, kBatch, kBatch);
+      if (n <= 0) return valid;
+      struct Loan {
+        dds_entity_t reader;
+        void** samples;
+        dds_return_t n;
+        ~Loan() { dds_return_loan(reader, samples, n); }
+      } loan{handle(), samples, n};
+      for (dds_return_t i = 0; i < n; ++i) {
+        if (!infos[i].valid_data) continue;
+        ++valid;
+        on_sample(*static_cast<const Msg*>(samples[i]));
+      }
+      if (static_cast<std::size_t>(n) < kBatch) return valid;
+    }
+  }
+};
+
+}  // namespace jpcr

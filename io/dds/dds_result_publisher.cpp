@@ -1,0 +1,110 @@
+#include "jpcr/io/dds/dds_result_publisher.hpp"
+
+#include "jpcr/io/dds/ros_messages.hpp"
+
+namespace jpcr {
+
+struct DdsResultPublisher::Writers {
+  Writers(const DdsParticipant& p, const DdsConfig& c)
+      : odometry(p, result_topic_name(c, ResultTopic::kOdometry),
+                 result_topic_qos(c, ResultTopic::kOdometry)),
+        keyframe_pose(p, result_topic_name(c, ResultTopic::kKeyframePose),
+                      result_topic_qos(c, ResultTopic::kKeyframePose)),
+        path(p, result_topic_name(c, ResultTopic::kPath), result_topic_qos(c, ResultTopic::kPath)),
+        curvature(p, result_topic_name(c, ResultTopic::kCurvature),
+                  result_topic_qos(c, ResultTopic::kCurvature)),
+        curvature_color(p, result_topic_name(c, ResultTopic::kCurvatureColor),
+                        result_topic_qos(c, ResultTopic::kCurvatureColor)) {}
+
+  DdsWriter<RosOdometry> odometry;
+  DdsWriter<RosPoseStamped> keyframe_pose;
+  DdsWriter<RosPath> path;
+  DdsWriter<RosImage> curvature;
+  DdsWriter<RosImage> curvature_color;
+};
+
+const char* to_string(ResultTopic topic) {
+  switch (topic) {
+    case ResultTopic::kOdometry:
+      return "odom";
+    case ResultTopic::kKeyframePose:
+      return "keyframe_pose";
+    case ResultTopic::kPath:
+      return "path";
+    case ResultTopic::kCurvature:
+      return "curvature";
+    case ResultTopic::kCurvatureColor:
+      return "curvature_color";
+  }
+  return "?";
+}
+
+std::string result_topic_name(const DdsConfig& config, ResultTopic topic) {
+  return config.topic_prefix + to_string(topic);
+}
+
+DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic) {
+  switch (topic) {
+    case ResultTopic::kPath:
+      return DdsQos{true, true, 1};
+    case ResultTopic::kCurvature:
+    case ResultTopic::kCurvatureColor:
+      return DdsQos{true, false, config.image_history_depth};
+    default:
+      return DdsQos{true, false, config.history_depth};
+  }
+}
+
+DdsResultPublisher::DdsResultPublisher(const DdsParticipant& participant, const DdsConfig& config)
+    : config_(config), writers_(std::make_unique<Writers>(participant, config)) {}
+
+DdsResultPublisher::~DdsResultPublisher() = default;
+
+void DdsResultPublisher::publish_odometry(const StampedPose& pose, const Matrix6d& covariance) {
+  writers_->odometry.write(
+      odometry_message(pose, covariance, config_.world_frame_id, config_.camera_frame_id));
+}
+
+void DdsResultPublisher::publish_keyframe(const StampedPose& pose,
+                                          const Image<Eigen::Vector2f>& curvature,
+                                          const ColorImage& color) {
+  writers_->keyframe_pose.write(pose_stamped_message(pose, config_.world_frame_id));
+  if (!curvature.empty()) {
+    const RosImageBuffer k = encode_curvature_image(curvature);
+    writers_->curvature.write(image_message(k, pose.timestamp, config_.camera_frame_id));
+  }
+  if (!color.empty()) {
+    const RosImageBuffer c = encode_rgb8_image(color);
+    writers_->curvature_color.write(image_message(c, pose.timestamp, config_.camera_frame_id));
+  }
+}
+
+void DdsResultPublisher::publish_path(const Trajectory& trajectory) {
+  const PathMessage path(trajectory, config_.world_frame_id);
+  writers_->path.write(path.message());
+}
+
+bool DdsResultPublisher::flush(std::chrono::milliseconds timeout) const {
+  const Writers& w = *writers_;
+  return w.odometry.wait_for_acks(timeout) && w.keyframe_pose.wait_for_acks(timeout) &&
+         w.path.wait_for_acks(timeout) && w.curvature.wait_for_acks(timeout) &&
+         w.curvature_color.wait_for_acks(timeout);
+}
+
+int DdsResultPublisher::matched(ResultTopic topic) const {
+  switch (topic) {
+    case ResultTopic::kOdometry:
+      return writers_->odometry.matched();
+    case ResultTopic::kKeyframePose:
+      return writers_->keyframe_pose.matched();
+    case ResultTopic::kPath:
+      return writers_->path.matched();
+    case ResultTopic::kCurvature:
+      return writers_->curvature.matched();
+    case ResultTopic::kCurvatureColor:
+      return writers_->curvature_color.matched();
+  }
+  return 0;
+}
+
+}  // namespace jpcr

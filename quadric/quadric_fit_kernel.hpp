@@ -1,0 +1,175 @@
+// Quad IT for one pixel (method.md §3): the weighted Gauss-Newton fit of the quadric γ_p to the
+// vertices of p's neighbourhood. JPCR_HD and allocation-free, so the dense CPU fit
+// (quadric_fit.cpp) and the CUDA kernel (cuda/) run exactly this code per pixel.
+#pragma once
+
+#include <Eigen/Core>
+
+#include "jpcr/quadric/dense_cholesky.hpp"
+#include "jpcr/quadric/neighbourhood_pattern.hpp"
+#include "jpcr/quadric/quadric_model.hpp"
+
+namespace jpcr {
+
+/// Quad IT tunables (method.md §3). A plain struct with the reference values; YAML maps onto it
+/// in io/ (section `quadric:`), and the CUDA kernels receive it by value.
+struct QuadricFitParams {
+  int iterations = 3;            // Gauss-Newton iterations (the reference ran exactly 3)
+  float fair_n0 = 0.004f;        // m: n₀ of the weight w = n₀² / (n₀² + r² + d²)
+  float residual_gate = 0.014f;  // m: samples with |r| above it are dropped (depth edges)
+  // The paper picks n "close to the upper limit of a typical error value"; for sensors whose noise
+  // grows with range (the paper's k % protocol, Kinect) both constants can grow with it:
+  // n₀(p) = fair_n0 + fair_n0_per_range · |p̄|, gate(p) = residual_gate + gate_per_range · |p̄|.
+  float fair_n0_per_range = 0.0f;     // m per m of range (0: the reference constant n₀)
+  float gate_per_range = 0.0f;        // m per m of range (0: the reference constant gate)
+  float damping = 0.01f;              // relative Levenberg damping on the diagonal
+  int min_samples = 10;               // fewer valid samples → the pixel is invalid
+  float angle_tolerance = 1e-5f;      // rad: early stop when |Δω| ∞-norm is below it ...
+  float offset_tolerance = 1e-6f;     // m:   ... and |Δt_z| below this ...
+  float curvature_tolerance = 1e-3f;  // 1/m: ... and |Δ(a, b, c)| ∞-norm below this
+
+  void validate() const;  // throws InputError "field: problem"
+};
+
+/// Why a pixel has no quadric.
+enum class QuadricStatus : unsigned char {
+  kValid = 0,
+  kNoCentre,       // the centre pixel has no depth
+  kNoNormal,       // no initial normal (too few neighbours for the plane fit)
+  kTooFewSamples,  // fewer than min_samples samples passed the gate
+  kSingular,       // the 6x6 system is singular or not finite
+};
+
+/// A read-only view of a vertex map that device code can hold (row-major, NaN = invalid).
+struct VertexView {
+  const Eigen::Vector3f* data = nullptr;
+  int width = 0;
+  int height = 0;
+
+  JPCR_HD bool in_bounds(int u, int v) const { return u >= 0 && v >= 0 && u < width && v < height; }
+  JPCR_HD const Eigen::Vector3f& operator()(int u, int v) const { return data[v * width + u]; }
+};
+
+/// True for a finite float (false for NaN and ±Inf) without <cmath>'s host-only overloads.
+JPCR_HD bool is_finite_value(float x) {
+  return x - x == 0.0f;
+}
+
+/// Σ w JᵀJ (lower triangle) and Σ w J r of one 6-parameter problem, plus the cost Σ w r².
+template <typename Scalar>
+struct NormalEquations6 {
+  Eigen::Matrix<Scalar, 6, 6> H = Eigen::Matrix<Scalar, 6, 6>::Zero();
+  Eigen::Matrix<Scalar, 6, 1> g = Eigen::Matrix<Scalar, 6, 1>::Zero();
+  Scalar cost = 0;
+  int count = 0;
+
+  JPCR_HD void add(const Eigen::Matrix<Scalar, 6, 1>& J, Scalar r, Scalar w) {
+    for (int i = 0; i < 6; ++i) {
+      const Scalar wJi = w * J(i);
+      for (int j = 0; j <= i; ++j)
+        H(i, j) += wJi * J(j);
+      g(i) += wJi * r;
+    }
+    cost += w * r * r;
+    ++count;
+  }
+};
+
+/// The weight constant n₀ and the residual gate at a quadric centre p̄ (m).
+template <typename Scalar>
+struct SampleGate {
+  Scalar n0;
+  Scalar gate;
+
+  JPCR_HD static SampleGate at(const QuadricFitParams& p,
+                               const Eigen::Matrix<Scalar, 3, 1>& centre) {
+    const Scalar range = centre.norm();
+    return {Scalar(p.fair_n0) + Scalar(p.fair_n0_per_range) * range,
+            Scalar(p.residual_gate) + Scalar(p.gate_per_range) * range};
+  }
+};
+
+/// Adds the samples of `pattern` around (u, v) to the quadric normal equations (frame-1 terms of
+/// method.md §3/§6): gate |r| ≤ gate, weight fair_weight(r, |X − p̄|², n₀).
+template <typename Scalar>
+JPCR_HD void accumulate_quadric_samples(const QuadricT<Scalar>& q, const VertexView& vertices,
+                                        const PixelOffset* pattern, int pattern_size, int u, int v,
+                                        const QuadricFitParams& p, NormalEquations6<Scalar>& ne) {
+  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;
+  const SampleGate<Scalar> limits = SampleGate<Scalar>::at(p, q.center);
+  for (int k = 0; k < pattern_size; ++k) {
+    const int su = u + pattern[k].du, sv = v + pattern[k].dv;
+    if (!vertices.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
+    const Eigen::Vector3f& Xf = vertices(su, sv);
+    if (!is_finite_value(Xf.z())) continue;
+    const Vector3 X = Xf.template cast<Scalar>();
+    const QuadricLinearization<Scalar> l = linearize_quadric(q, X);
+    if (!(l.r <= limits.gate && l.r >= -limits.gate)) continue;
+    const Scalar w = fair_weight(l.r, (X - q.center).squaredNorm(), limits.n0);
+    ne.add(l.J, l.r, w);
+  }
+}
+
+/// Solves the damped system (H + λ diag H) Δ = −g in double (method.md §10: the step carries the
+/// minus sign the paper drops). Returns false when it is singular or not finite.
+template <typename Scalar>
+JPCR_HD bool solve_damped_step(const NormalEquations6<Scalar>& ne, double damping,
+                               Eigen::Matrix<double, 6, 1>& delta) {
+  Eigen::Matrix<double, 6, 6> H = ne.H.template cast<double>();
+  for (int i = 0; i < 6; ++i)
+    H(i, i) *= 1.0 + damping;
+  if (!cholesky_factor<double, 6>(H)) return false;
+  delta = -ne.g.template cast<double>();
+  cholesky_solve<double, 6>(H, delta);
+  for (int i = 0; i < 6; ++i)
+    if (!(delta(i) - delta(i) == 0.0)) return false;
+  return true;
+}
+
+/// The early stop of Quad IT: every part of the step below its tolerance.
+JPCR_HD bool step_converged(const Eigen::Matrix<double, 6, 1>& delta, const QuadricFitParams& p) {
+  const double dw = delta(0) * delta(0) + delta(1) * delta(1);
+  const double dk = fmax(fabs(delta(3)), fmax(fabs(delta(4)), fabs(delta(5))));
+  return dw < double(p.angle_tolerance) * p.angle_tolerance &&
+         fabs(delta(2)) < p.offset_tolerance && dk < p.curvature_tolerance;
+}
+
+/// Quad IT at pixel (u, v): starts from the plane of `normal` at p̄ = vertices(u, v) and runs up
+/// to p.iterations Gauss-Newton steps. A step is kept only if it does not raise the mean
+/// weighted cost Σ w r² / n (the Levenberg-Marquardt safeguard; under range noise the undamped
+/// rotation steps can overshoot). On kValid, q holds the fitted quadric.
+template <typename Scalar>
+JPCR_HD QuadricStatus fit_quadric_pixel(const VertexView& vertices, const PixelOffset* pattern,
+                                        int pattern_size, int u, int v,
+                                        const Eigen::Vector3f& normal, const QuadricFitParams& p,
+                                        QuadricT<Scalar>& q) {
+  const Eigen::Vector3f& centre = vertices(u, v);
+  if (!is_finite_value(centre.z())) return QuadricStatus::kNoCentre;
+  if (!is_finite_value(normal.z())) return QuadricStatus::kNoNormal;
+  q.R = local_frame<Scalar>(normal.template cast<Scalar>().normalized());
+  q.center = centre.template cast<Scalar>();
+  q.t_z = q.a = q.b = q.c = Scalar(0);
+  QuadricT<Scalar> previous = q;
+  double previous_cost = 1e300;
+  // One pass more than steps: the last pass only checks the last step's cost.
+  for (int it = 0; it <= p.iterations; ++it) {
+    NormalEquations6<Scalar> ne;
+    accumulate_quadric_samples(q, vertices, pattern, pattern_size, u, v, p, ne);
+    const double cost = double(ne.cost) / (ne.count > 0 ? ne.count : 1);
+    if (cost > previous_cost) {  // the last step made the fit worse: undo it and stop
+      q = previous;
+      break;
+    }
+    if (it == p.iterations) break;
+    if (ne.count < p.min_samples) return QuadricStatus::kTooFewSamples;
+    previous = q;
+    previous_cost = cost;
+    Eigen::Matrix<double, 6, 1> delta;
+    if (!solve_damped_step(ne, p.damping, delta)) return QuadricStatus::kSingular;
+    apply_quadric_update(q, QuadricVector<Scalar>(delta.template cast<Scalar>()));
+    if (step_converged(delta, p)) break;
+  }
+  return QuadricStatus::kValid;
+}
+
+}  // namespace jpcr

@@ -1,0 +1,32 @@
+// Parameters shared by the per-pixel quadric estimators (Quad IT, Quad LS) and the joint
+// refiners: the sampling pattern, the initial normals and the Quad IT solver. YAML section
+// `quadric:` (io/params.hpp).
+#pragma once
+
+#include "jpcr/quadric/neighbourhood_pattern.hpp"
+#include "jpcr/quadric/quadric_fit_kernel.hpp"
+#include "jpcr/quadric/surface_normals.hpp"
+
+namespace jpcr {
+
+/// The pattern of method.md §2, given at a reference width and scaled to each image.
+struct PatternParams {
+  int radius = 6;             // r, pattern cells at the reference width
+  int stride = 3;             // s, pixels per cell at the reference width
+  int reference_width = 640;  // px: the width r and s are given for
+
+  NeighbourhoodPattern for_width(int width) const {
+    return NeighbourhoodPattern::scaled(radius, stride, width, reference_width);
+  }
+  void validate() const;  // throws InputError "field: problem"
+};
+
+struct QuadricParams {
+  PatternParams pattern;
+  NormalEstimationParams normals;
+  QuadricFitParams fit;
+
+  void validate() const;
+};
+
+}  // namespace jpcr

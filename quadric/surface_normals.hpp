@@ -1,0 +1,21 @@
+// Initial normals for the quadric fits (method.md §3): a least-squares plane through the valid
+// vertices of a (2h+1)x(2h+1) window (7x7 by default), oriented toward the camera (n·X < 0).
+#pragma once
+
+#include "jpcr/quadric/vertex_map.hpp"
+
+namespace jpcr {
+
+struct NormalEstimationParams {
+  int half_window = 3;          // h: the window is (2h+1)² pixels (7x7 by default)
+  int min_points = 6;           // fewer valid window points → no normal
+  float max_depth_jump = 0.1f;  // fraction of the centre's depth: window points whose depth
+                                // differs more are on another surface and left out of the plane
+  void validate() const;        // throws InputError "field: problem"
+};
+
+/// One normal per pixel (camera frame, unit, n·X < 0); NaN where the centre has no vertex, too few
+/// window points remain or the points are collinear.
+NormalMap estimate_normals(const VertexMap& vertices, const NormalEstimationParams& params = {});
+
+}  // namespace jpcr

@@ -1,0 +1,166 @@
+// Depth input over real Cyclone DDS on loopback: a frame published as 16UC1 or 32FC1 with its
+// camera_info arrives as the identical jpcr::Frame; malformed samples are rejected with one log
+// line each while the subscriber keeps receiving.
+#include <gtest/gtest.h>
+
+#include <sstream>
+
+#include "dds_test_config.hpp"
+#include "jpcr/io/dds/dds_depth_publisher.hpp"
+#include "jpcr/io/dds/dds_depth_subscriber.hpp"
+#include "jpcr/io/dds/ros_messages.hpp"
+
+namespace jpcr {
+namespace {
+
+using std::chrono::milliseconds;
+constexpr milliseconds kTimeout{5000};
+
+Frame test_frame(double timestamp) {
+  Frame f;
+  f.timestamp = timestamp;
+  f.camera.fx = 520.5;
+  f.camera.fy = 519.25;
+  f.camera.cx = 160.5;
+  f.camera.cy = 120.25;
+  f.camera.width = 320;
+  f.camera.height = 240;
+  f.camera.distortion = {0.01, -0.02, 0.0, 0.0, 0.003};
+  f.depth = DepthImage(320, 240);
+  for (int v = 0; v < 240; ++v)
+    for (int u = 0; u < 320; ++u)
+      f.depth(u, v) = (u * v) % 13 == 0 ? 0.0f : 0.001f * static_cast<float>(400 + u + 7 * v);
+  return f;
+}
+
+void expect_same_frame(const Frame& got, const Frame& sent, double depth_scale) {
+  EXPECT_NEAR(got.timestamp, sent.timestamp, 1e-9);
+  EXPECT_EQ(got.camera.fx, sent.camera.fx);
+  EXPECT_EQ(got.camera.fy, sent.camera.fy);
+  EXPECT_EQ(got.camera.cx, sent.camera.cx);
+  EXPECT_EQ(got.camera.cy, sent.camera.cy);
+  EXPECT_EQ(got.camera.width, sent.camera.width);
+  EXPECT_EQ(got.camera.height, sent.camera.height);
+  EXPECT_EQ(got.camera.distortion, sent.camera.distortion);
+  EXPECT_EQ(got.camera.depth_scale, depth_scale);
+  ASSERT_EQ(got.depth.width(), sent.depth.width());
+  ASSERT_EQ(got.depth.height(), sent.depth.height());
+  for (std::size_t i = 0; i < sent.depth.size(); ++i)
+    ASSERT_EQ(got.depth[i], sent.depth[i]) << "pixel " << i;
+}
+
+class DdsDepth : public ::testing::Test {
+ protected:
+  DdsConfig config_ =
+      test::loopback_dds_config(::testing::UnitTest::GetInstance()->current_test_info()->name());
+  DdsParticipant camera_side_{config_};
+  DdsParticipant node_side_{config_};
+};
+
+TEST_F(DdsDepth, FrameArrivesIdenticalIn16UC1And32FC1) {
+  std::ostringstream log;
+  DdsDepthSubscriber subscriber(node_side_, config_, &log);
+  for (const DepthEncoding encoding : {DepthEncoding::kMillimetres16, DepthEncoding::kMetres32}) {
+    DdsDepthPublisher publisher(camera_side_, config_, encoding);
+    ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
+    const Frame sent = test_frame(encoding == DepthEncoding::kMetres32 ? 10.5 : 3.125);
+    publisher.publish(sent);
+    const std::optional<Frame> got = subscriber.wait_frame(kTimeout);
+    ASSERT_TRUE(got) << to_string(encoding);
+    expect_same_frame(*got, sent, encoding == DepthEncoding::kMetres32 ? 1.0 : 1000.0);
+  }
+  EXPECT_EQ(subscriber.frames_received(), 2u);
+  EXPECT_EQ(subscriber.samples_rejected(), 0u);
+  EXPECT_EQ(log.str(), "");
+}
+
+TEST_F(DdsDepth, WaitFrameTimesOutWithoutPublisher) {
+  DdsDepthSubscriber subscriber(node_side_, config_);
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_FALSE(subscriber.wait_frame(milliseconds(200)));
+  const auto waited = std::chrono::steady_clock::now() - start;
+  EXPECT_GE(waited, milliseconds(190));
+  EXPECT_LT(waited, milliseconds(2000));
+}
+
+TEST_F(DdsDepth, MalformedSamplesAreRejectedAndReceptionGoesOn) {
+  config_.image_history_depth = 16;  // every sample of the burst is kept for the subscriber
+  std::ostringstream log;
+  DdsDepthSubscriber subscriber(node_side_, config_, &log);
+  DdsWriter<RosImage> images(camera_side_, config_.depth_topic, config_.depth_qos());
+  DdsWriter<RosCameraInfoMsg> infos(camera_side_, config_.camera_info_topic,
+                                    config_.camera_info_qos());
+  ASSERT_TRUE(images.wait_matched(1, kTimeout));
+  ASSERT_TRUE(infos.wait_matched(1, kTimeout));
+
+  const Frame good = test_frame(1.0);
+  const RosCameraInfo info = encode_camera_info(good.camera);
+  const std::string frame_id = "cam";
+  infos.write(camera_info_message(info, 1.0, frame_id));
+  // Let the camera_info land first (a depth image before it would wait for it, checked the same).
+  EXPECT_FALSE(subscriber.wait_frame(milliseconds(200)));
+
+  const RosImageBuffer depth = encode_depth_image(good.depth, DepthEncoding::kMillimetres16);
+  auto send_bad = [&](auto&& mutate) {
+    RosImageBuffer b = depth;
+    RosImage m = image_message(b, 1.0, frame_id);
+    mutate(m, b);
+    images.write(m);
+  };
+  send_bad([](RosImage& m, RosImageBuffer&) { m.data._length -= 2; });  // length
+  send_bad([](RosImage& m, RosImageBuffer&) { m.encoding = const_cast<char*>("yuv422"); });
+  send_bad([](RosImage& m, RosImageBuffer&) {
+    m.width = m.height = 0;
+    m.data._length = 0;
+  });
+  send_bad([](RosImage& m, RosImageBuffer&) {  // claims 100 MB
+    m.height = 5000;
+    m.width = 10000;
+    m.step = 20000;
+  });
+  send_bad([](RosImage& m, RosImageBuffer&) { m.is_bigendian = 1; });
+  send_bad([](RosImage& m, RosImageBuffer&) { m.step = 10; });
+  RosCameraInfo bad_info = info;
+  bad_info.k[0] = 0.0;
+  infos.write(camera_info_message(bad_info, 1.0, frame_id));
+  const Frame next = test_frame(2.0);
+  const RosImageBuffer next_depth = encode_depth_image(next.depth, DepthEncoding::kMillimetres16);
+  images.write(image_message(next_depth, 2.0, frame_id));
+
+  const std::optional<Frame> got = subscriber.wait_frame(kTimeout);
+  ASSERT_TRUE(got);
+  expect_same_frame(*got, next, 1000.0);
+  EXPECT_EQ(subscriber.samples_rejected(), 7u) << log.str();
+  EXPECT_EQ(subscriber.frames_received(), 1u);
+  const std::string text = log.str();
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 7) << text;
+  for (const char* expected :
+       {"image_raw: rejected sample: data is 153598 bytes, step x height = 153600",
+        "image_raw: rejected sample: unknown encoding 'yuv422'", "zero size 0x0",
+        "claimed size step x height = 100000000 bytes exceeds the limit of 67108864",
+        "big-endian data is not supported", "step 10 < width x 2 bytes = 640",
+        "camera_info: rejected sample: camera_info focal lengths fx = 0.000000"}) {
+    EXPECT_NE(text.find(expected), std::string::npos) << expected << "\nin:\n" << text;
+  }
+}
+
+TEST_F(DdsDepth, DepthBeforeCameraInfoWaitsForIt) {
+  DdsDepthSubscriber subscriber(node_side_, config_);
+  DdsWriter<RosImage> images(camera_side_, config_.depth_topic, config_.depth_qos());
+  DdsWriter<RosCameraInfoMsg> infos(camera_side_, config_.camera_info_topic,
+                                    config_.camera_info_qos());
+  ASSERT_TRUE(images.wait_matched(1, kTimeout) && infos.wait_matched(1, kTimeout));
+  const Frame sent = test_frame(5.0);
+  const RosImageBuffer depth = encode_depth_image(sent.depth, DepthEncoding::kMetres32);
+  const std::string frame_id = "cam";
+  images.write(image_message(depth, 5.0, frame_id));
+  EXPECT_FALSE(subscriber.wait_frame(milliseconds(100)));
+  const RosCameraInfo info = encode_camera_info(sent.camera);
+  infos.write(camera_info_message(info, 5.0, frame_id));
+  const std::optional<Frame> got = subscriber.wait_frame(kTimeout);
+  ASSERT_TRUE(got);
+  expect_same_frame(*got, sent, 1.0);
+}
+
+}  // namespace
+}  // namespace jpcr

@@ -1,0 +1,198 @@
+// Real Cyclone DDS round trips on loopback for the published result topics: pose, odometry with
+// covariance, path to a late joiner, a 640x480 32FC2 curvature map bit-exact, its colour image.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <optional>
+#include <random>
+
+#include "dds_test_config.hpp"
+#include "jpcr/io/dds/dds_result_publisher.hpp"
+#include "jpcr/io/dds/ros_messages.hpp"
+#include "jpcr/quadric/se3.hpp"
+
+namespace jpcr {
+namespace {
+
+using std::chrono::milliseconds;
+constexpr milliseconds kTimeout{5000};
+
+// Waits for and takes one sample, converted by `convert` while the loan is valid.
+template <typename Msg, typename Convert>
+auto take_one(const DdsReader<Msg>& reader, Convert convert)
+    -> std::optional<decltype(convert(std::declval<const Msg&>()))> {
+  std::optional<decltype(convert(std::declval<const Msg&>()))> out;
+  const auto deadline = std::chrono::steady_clock::now() + kTimeout;
+  while (!out && std::chrono::steady_clock::now() < deadline) {
+    reader.wait(milliseconds(100));
+    reader.take([&](const Msg& m) {
+      if (!out) out = convert(m);
+    });
+  }
+  return out;
+}
+
+StampedPose some_pose(double t) {
+  Vector6d xi;
+  xi << 0.3, -1.2, 2.5, 0.1, -0.4, 0.9;
+  return StampedPose{t, se3_exp(xi * (1.0 + t))};
+}
+
+void expect_same_pose(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  EXPECT_LT((a.matrix() - b.matrix()).cwiseAbs().maxCoeff(), 1e-12);
+}
+
+class DdsResults : public ::testing::Test {
+ protected:
+  DdsConfig config_ =
+      test::loopback_dds_config(::testing::UnitTest::GetInstance()->current_test_info()->name());
+  DdsParticipant publisher_side_{config_};
+  DdsParticipant subscriber_side_{config_};
+  DdsResultPublisher publisher_{publisher_side_, config_};
+
+  template <typename Msg>
+  DdsReader<Msg> reader(ResultTopic topic) {
+    return DdsReader<Msg>(subscriber_side_, result_topic_name(config_, topic),
+                          result_topic_qos(config_, topic));
+  }
+};
+
+TEST_F(DdsResults, TopicNamesAndQosFollowRosConventions) {
+  EXPECT_EQ(result_topic_name(DdsConfig{}, ResultTopic::kOdometry), "rt/jpcr/odom");
+  EXPECT_EQ(result_topic_name(DdsConfig{}, ResultTopic::kCurvatureColor),
+            "rt/jpcr/curvature_color");
+  const DdsQos path = result_topic_qos(DdsConfig{}, ResultTopic::kPath);
+  EXPECT_TRUE(path.reliable && path.transient_local && path.depth == 1);
+  EXPECT_FALSE(result_topic_qos(DdsConfig{}, ResultTopic::kOdometry).transient_local);
+}
+
+TEST_F(DdsResults, KeyframePoseArrives) {
+  auto poses = reader<RosPoseStamped>(ResultTopic::kKeyframePose);
+  ASSERT_TRUE(
+      test::eventually([&] { return publisher_.matched(ResultTopic::kKeyframePose) == 1; }));
+  const StampedPose sent = some_pose(1305031102.5);
+  publisher_.publish_keyframe(sent, {}, {});
+  const auto got = take_one(poses, [](const RosPoseStamped& m) {
+    return std::make_pair(stamped_pose_of(m), std::string(m.header.frame_id));
+  });
+  ASSERT_TRUE(got);
+  EXPECT_NEAR(got->first.timestamp, sent.timestamp, 1e-6);
+  expect_same_pose(got->first.pose, sent.pose);
+  EXPECT_EQ(got->second, "map");
+}
+
+TEST_F(DdsResults, OdometryCarriesTheCovariance) {
+  auto odom = reader<RosOdometry>(ResultTopic::kOdometry);
+  ASSERT_TRUE(test::eventually([&] { return publisher_.matched(ResultTopic::kOdometry) == 1; }));
+  Matrix6d cov;
+  for (int r = 0; r < 6; ++r)
+    for (int c = 0; c < 6; ++c)
+      cov(r, c) = r == c ? 1e-4 * (r + 1) : 1e-6 * (r + 1) * (c + 7);  // asymmetric: checks order
+  const StampedPose sent = some_pose(2.25);
+  publisher_.publish_odometry(sent, cov);
+  struct Got {
+    StampedPose pose;
+    Matrix6d cov, twist_cov;
+    std::string frame, child;
+  };
+  const auto got = take_one(odom, [](const RosOdometry& m) {
+    return Got{StampedPose{to_seconds(stamp_of(m.header)), pose_of(m.pose.pose)},
+               covariance_of(m.pose.covariance), covariance_of(m.twist.covariance),
+               m.header.frame_id, m.child_frame_id};
+  });
+  ASSERT_TRUE(got);
+  EXPECT_EQ(got->pose.timestamp, 2.25);
+  expect_same_pose(got->pose.pose, sent.pose);
+  EXPECT_EQ(got->cov, cov);
+  EXPECT_EQ(got->twist_cov, -Matrix6d::Identity());
+  EXPECT_EQ(got->frame, "map");
+  EXPECT_EQ(got->child, "camera_depth_optical_frame");
+}
+
+TEST_F(DdsResults, LateJoinerReceivesTheLastPath) {
+  Trajectory first = {some_pose(0.0), some_pose(0.1), some_pose(0.2)};
+  Trajectory last = first;
+  last.push_back(some_pose(0.3));
+  last.push_back(some_pose(0.4));
+  publisher_.publish_path(first);
+  publisher_.publish_path(last);
+  auto path = reader<RosPath>(ResultTopic::kPath);  // joins after both were published
+  const auto got = take_one(path, [](const RosPath& m) { return trajectory_of(m); });
+  ASSERT_TRUE(got);
+  ASSERT_EQ(got->size(), 5u);
+  for (std::size_t i = 0; i < last.size(); ++i) {
+    EXPECT_NEAR((*got)[i].timestamp, last[i].timestamp, 1e-9);
+    expect_same_pose((*got)[i].pose, last[i].pose);
+  }
+  // Depth 1: nothing older follows.
+  EXPECT_EQ(path.take([](const RosPath&) {}), 0u);
+}
+
+TEST_F(DdsResults, CurvatureMap640x480ArrivesBitExact) {
+  auto curvature = reader<RosImage>(ResultTopic::kCurvature);
+  auto color = reader<RosImage>(ResultTopic::kCurvatureColor);
+  ASSERT_TRUE(test::eventually([&] {
+    return publisher_.matched(ResultTopic::kCurvature) == 1 &&
+           publisher_.matched(ResultTopic::kCurvatureColor) == 1;
+  }));
+  std::mt19937 rng(5);
+  std::normal_distribution<float> normal(0.0f, 3.0f);
+  Image<Eigen::Vector2f> k(640, 480, Eigen::Vector2f::Zero());
+  ColorImage c(640, 480);
+  for (std::size_t i = 0; i < k.size(); ++i) {
+    k[i] = i % 17 == 0 ? Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN())
+                       : Eigen::Vector2f(normal(rng), normal(rng));
+    c[i] = Rgb8{std::uint8_t(i), std::uint8_t(i >> 8), std::uint8_t(i >> 16)};
+  }
+  publisher_.publish_keyframe(some_pose(4.0), k, c);
+  const auto got = take_one(curvature, [](const RosImage& m) {
+    EXPECT_STREQ(m.encoding, "32FC2");
+    EXPECT_EQ(m.step, 640u * 8u);
+    EXPECT_STREQ(m.header.frame_id, "camera_depth_optical_frame");
+    return decode_curvature_image(image_view_of(m), {});
+  });
+  ASSERT_TRUE(got);
+  ASSERT_EQ(got->width(), 640);
+  ASSERT_EQ(got->height(), 480);
+  EXPECT_EQ(std::memcmp(got->data(), k.data(), k.size() * sizeof(Eigen::Vector2f)), 0);
+  const auto got_color =
+      take_one(color, [](const RosImage& m) { return decode_rgb8_image(image_view_of(m), {}); });
+  ASSERT_TRUE(got_color);
+  EXPECT_EQ(std::memcmp(got_color->data(), c.data(), c.size() * sizeof(Rgb8)), 0);
+}
+
+TEST_F(DdsResults, KeyframeMessageRoundTrips) {
+  const std::string topic = config_.topic_prefix + "keyframe";
+  DdsWriter<RosKeyframe> writer(publisher_side_, topic, DdsQos{});
+  DdsReader<RosKeyframe> reader(subscriber_side_, topic, DdsQos{});
+  ASSERT_TRUE(writer.wait_matched(1, kTimeout));
+  Frame frame;
+  frame.timestamp = 7.5;
+  frame.camera.width = 32;
+  frame.camera.height = 24;
+  frame.depth = DepthImage(32, 24, 1.25f);
+  frame.depth(3, 4) = 0.0f;
+  Matrix6d cov = Matrix6d::Identity() * 1e-3;
+  cov(0, 5) = 2e-5;
+  const KeyframeMessage message(frame, some_pose(7.5), cov, DepthEncoding::kMetres32, "map", "cam");
+  writer.write(message.message());
+  const auto got = take_one(reader, [](const RosKeyframe& m) { return decode_keyframe(m, {}); });
+  ASSERT_TRUE(got);
+  EXPECT_EQ(got->frame.timestamp, 7.5);
+  EXPECT_EQ(got->frame.camera.fx, frame.camera.fx);
+  EXPECT_EQ(got->frame.camera.width, 32);
+  for (std::size_t i = 0; i < frame.depth.size(); ++i)
+    ASSERT_EQ(got->frame.depth[i], frame.depth[i]);
+  expect_same_pose(got->pose.pose, some_pose(7.5).pose);
+  EXPECT_EQ(got->covariance, cov);
+}
+
+TEST(DdsParticipant, BadDomainIdIsAnError) {
+  EXPECT_THROW(DdsParticipant(233), DdsError);
+  EXPECT_THROW(DdsParticipant(-1), DdsError);
+}
+
+}  // namespace
+}  // namespace jpcr

@@ -1,0 +1,181 @@
+// Curvature outputs and metrics: .npy round trip, the binary PLY layout, the colour code and its
+// key, the RMS/coverage figures against a hand-computed case, and the quadric: YAML section.
+#include <cmath>
+#include <cstring>
+
+#include <gtest/gtest.h>
+
+#include "input_error.hpp"
+#include "jpcr/io/curvature_metrics.hpp"
+#include "jpcr/io/curvature_output.hpp"
+#include "jpcr/io/npy.hpp"
+#include "jpcr/io/params.hpp"
+#include "temp_dir.hpp"
+
+namespace jpcr {
+namespace {
+
+const float kNaN = std::numeric_limits<float>::quiet_NaN();
+
+CurvatureImage ramp(int w, int h) {
+  CurvatureImage k(w, h, Eigen::Vector2f::Zero());
+  for (int v = 0; v < h; ++v)
+    for (int u = 0; u < w; ++u)
+      k(u, v) = Eigen::Vector2f(0.5f * u, -0.25f * v);
+  k(1, 1) = Eigen::Vector2f(kNaN, kNaN);
+  return k;
+}
+
+TEST(CurvatureOutput, NpyRoundTripKeepsValuesAndNaN) {
+  test::TempDir dir;
+  const CurvatureImage k = ramp(7, 5);
+  write_curvature_npy(dir.file("k.npy"), k);
+  const NpyArray raw = read_npy(dir.file("k.npy"));
+  EXPECT_EQ(raw.dtype, "f4");
+  EXPECT_EQ(raw.shape, (std::vector<std::size_t>{5, 7, 2}));  // H x W x 2, as numpy reads it
+  const CurvatureImage back = read_curvature_npy(dir.file("k.npy"));
+  ASSERT_EQ(back.width(), 7);
+  ASSERT_EQ(back.height(), 5);
+  for (std::size_t i = 0; i < k.size(); ++i) {
+    if (std::isnan(k[i].x())) {
+      EXPECT_TRUE(std::isnan(back[i].x()) && std::isnan(back[i].y()));
+    } else {
+      EXPECT_EQ(back[i], k[i]);
+    }
+  }
+}
+
+TEST(CurvatureOutput, ReadingAMapOfTheWrongShapeNamesTheFile) {
+  test::TempDir dir;
+  const std::vector<float> three(4 * 3 * 3, 0.0f);
+  write_npy<float>(dir.file("normals.npy"), {4, 3, 3}, three.data());
+  EXPECT_NE(test::input_error_of([&] {
+              read_curvature_npy(dir.file("normals.npy"));
+            }).find("normals.npy: expected a curvature map of shape H x W x 2"),
+            std::string::npos);
+  EXPECT_NE(test::input_error_of([&] {
+              read_curvature_npy(dir.file("missing.npy"));
+            }).find("missing.npy"),
+            std::string::npos);
+}
+
+TEST(CurvatureOutput, PlyHasOneBinaryVertexPerValidQuadric) {
+  QuadricMap map(4, 3);
+  VertexMap vertices(4, 3, invalid_vector());
+  Quadric q;
+  q.R = local_frame<float>(Eigen::Vector3f(0, 0, -1));
+  q.a = q.c = -2.0f;  // a ball of radius 0.5 m seen from outside
+  vertices(2, 1) = Eigen::Vector3f(0.1f, 0.2f, 1.5f);
+  map.set(2, 1, q);
+  vertices(3, 2) = Eigen::Vector3f(0.3f, 0.2f, 1.6f);  // a vertex without quadric: left out
+  const std::string ply = format_curvature_ply(vertices, map);
+  const std::size_t end = ply.find("end_header\n");
+  ASSERT_NE(end, std::string::npos);
+  EXPECT_NE(ply.find("format binary_little_endian 1.0"), std::string::npos);
+  EXPECT_NE(ply.find("element vertex 1\n"), std::string::npos);
+  EXPECT_NE(ply.find("property float k1\nproperty float k2\n"), std::string::npos);
+  const std::string body = ply.substr(end + 11);
+  ASSERT_EQ(body.size(), 8 * sizeof(float) + 3);
+  float values[8];
+  std::memcpy(values, body.data(), sizeof values);
+  EXPECT_FLOAT_EQ(values[2], 1.5f);                      // z
+  EXPECT_FLOAT_EQ(values[5], -1.0f);                     // n_z, toward the camera
+  EXPECT_FLOAT_EQ(values[6], -2.0f);                     // κ₁
+  EXPECT_FLOAT_EQ(values[7], -2.0f);                     // κ₂
+  EXPECT_EQ(static_cast<unsigned char>(body[32]), 255);  // a cap is red
+}
+
+TEST(CurvatureColors, ShapesHaveTheirColoursAndInvalidIsBlack) {
+  const float s = 10.0f;
+  const Rgb8 cap = curvature_color(-20, -20, s), cup = curvature_color(20, 20, s);
+  const Rgb8 plane = curvature_color(0, 0, s), none = curvature_color(kNaN, kNaN, s);
+  const Rgb8 ridge = curvature_color(0, -20, s), saddle = curvature_color(20, -20, s);
+  EXPECT_EQ((std::array<int, 3>{cap.r, cap.g, cap.b}), (std::array<int, 3>{255, 0, 0}));
+  EXPECT_EQ((std::array<int, 3>{cup.r, cup.g, cup.b}), (std::array<int, 3>{0, 0, 255}));
+  EXPECT_EQ((std::array<int, 3>{plane.r, plane.g, plane.b}), (std::array<int, 3>{255, 255, 255}));
+  EXPECT_EQ((std::array<int, 3>{none.r, none.g, none.b}), (std::array<int, 3>{0, 0, 0}));
+  EXPECT_EQ((std::array<int, 3>{ridge.r, ridge.g, ridge.b}), (std::array<int, 3>{255, 255, 0}));
+  EXPECT_EQ(saddle.r, 0);
+  EXPECT_GT(saddle.g, 200);
+  // Half the scale of curvedness is half way between white and the hue.
+  const Rgb8 soft = curvature_color(-5, -5, s);
+  EXPECT_EQ(soft.r, 255);
+  EXPECT_NEAR(soft.g, 128, 1);
+}
+
+TEST(CurvatureColors, KeyIsDrawnInTheCornerAndShowsTheShapes) {
+  const CurvatureImage k(640, 480, Eigen::Vector2f(kNaN, kNaN));
+  const ColorImage image = render_curvature(k);
+  const KeyPlacement key = key_placement(640, 480, {});
+  ASSERT_EQ(key.size, 120);
+  EXPECT_EQ(key.x0 + key.size, 640 - 8);
+  // Top-left of the key is κ₁ = +s, κ₂ = −s: a saddle (green); bottom-left κ₁ = κ₂ = −s: a cap.
+  const Rgb8 saddle = image(key.x0 + 2, key.y0 + 2);
+  EXPECT_GT(saddle.g, 200);
+  EXPECT_LT(saddle.r, 30);
+  const Rgb8 cap = image(key.x0 + 2, key.y0 + key.size - 5);  // just above the diagonal
+  EXPECT_GT(cap.r, 200);
+  EXPECT_LT(cap.b, 60);
+  EXPECT_EQ(image(10, 10).r, 0);  // outside the key the map is invalid: black
+  CurvatureColorParams no_key;
+  no_key.draw_key = false;
+  EXPECT_EQ(render_curvature(k, no_key)(key.x0 + 2, key.y0 + 2).g, 0);
+}
+
+TEST(CurvatureMetrics, RmsAndCoverageOfAHandComputedCase) {
+  CurvatureImage gt(2, 2, Eigen::Vector2f(kNaN, kNaN)), est(2, 2, Eigen::Vector2f(kNaN, kNaN));
+  gt(0, 0) = {1, 0};
+  gt(1, 0) = {2, 2};
+  gt(0, 1) = {0, 0};  // not estimated: counts against coverage only
+  est(0, 0) = {1.3f, -0.4f};
+  est(1, 0) = {2, 1};
+  est(1, 1) = {5, 5};  // no ground truth: ignored
+  CurvatureErrorAccumulator acc;
+  acc.add(gt, est);
+  const CurvatureErrors e = acc.result();
+  EXPECT_EQ(e.compared, 2u);
+  EXPECT_EQ(e.gt_valid, 3u);
+  EXPECT_NEAR(e.coverage, 2.0 / 3.0, 1e-12);
+  EXPECT_NEAR(e.rms_k1, std::sqrt((0.09 + 0.0) / 2), 1e-6);
+  EXPECT_NEAR(e.rms_k2, std::sqrt((0.16 + 1.0) / 2), 1e-6);
+  EXPECT_NEAR(e.rms, std::sqrt((0.09 + 0.16 + 1.0) / 4), 1e-6);
+  EXPECT_THROW(acc.add(gt, CurvatureImage(3, 2, Eigen::Vector2f::Zero())), InputError);
+}
+
+TEST(QuadricParamsYaml, DefaultYamlStatesTheBuiltInDefaults) {
+  const QuadricParams shipped =
+      load_params(std::string(JPCR_SOURCE_DIR) + "/configs/default.yaml").quadric;
+  const QuadricParams built_in;
+  EXPECT_EQ(shipped.pattern.radius, built_in.pattern.radius);
+  EXPECT_EQ(shipped.pattern.stride, built_in.pattern.stride);
+  EXPECT_EQ(shipped.pattern.reference_width, built_in.pattern.reference_width);
+  EXPECT_EQ(shipped.normals.half_window, built_in.normals.half_window);
+  EXPECT_FLOAT_EQ(shipped.normals.max_depth_jump, built_in.normals.max_depth_jump);
+  EXPECT_EQ(shipped.fit.iterations, built_in.fit.iterations);
+  EXPECT_FLOAT_EQ(shipped.fit.fair_n0, built_in.fit.fair_n0);
+  EXPECT_FLOAT_EQ(shipped.fit.residual_gate, built_in.fit.residual_gate);
+  EXPECT_FLOAT_EQ(shipped.fit.damping, built_in.fit.damping);
+  EXPECT_EQ(shipped.fit.min_samples, built_in.fit.min_samples);
+}
+
+TEST(QuadricParamsYaml, BadValuesNameTheKey) {
+  const Params p =
+      parse_params("quadric:\n  fit:\n    iterations: 5\n    fair_n0_per_range: 0.03\n", "p.yaml");
+  EXPECT_EQ(p.quadric.fit.iterations, 5);
+  EXPECT_FLOAT_EQ(p.quadric.fit.fair_n0_per_range, 0.03f);
+  EXPECT_NE(test::input_error_of([] {
+              parse_params("quadric:\n  fit:\n    fair_n0: big\n", "p.yaml");
+            }).find("fair_n0"),
+            std::string::npos);
+  EXPECT_NE(test::input_error_of([] {
+              parse_params("quadric:\n  fit:\n    iterations: 0\n", "p.yaml");
+            }).find("iterations"),
+            std::string::npos);
+  EXPECT_NE(test::input_error_of([] {
+              parse_params("quadric:\n  pattern:\n    radius: 6\n    strid: 3\n", "p.yaml");
+            }).find("strid"),
+            std::string::npos);
+}
+
+}  // namespace
+}  // namespace jpcr

@@ -1,0 +1,282 @@
+// The sensor_msgs decoder (io/dds/ros_image.hpp) without DDS: good images decode exactly, every
+// malformed case is rejected with a message naming the problem.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <limits>
+
+#include "input_error.hpp"
+#include "jpcr/io/dds/ros_image.hpp"
+#include "jpcr/io/params.hpp"
+
+namespace jpcr {
+namespace {
+
+using test::input_error_of;
+
+DepthImage ramp_depth(int width, int height) {
+  DepthImage d(width, height);
+  for (int v = 0; v < height; ++v)
+    for (int u = 0; u < width; ++u)
+      d(u, v) = (u + v) % 7 == 0 ? 0.0f : 0.001f * static_cast<float>(500 + u * 3 + v * 11);
+  return d;
+}
+
+CameraIntrinsics small_camera(int width, int height) {
+  CameraIntrinsics c;
+  c.fx = 300.0;
+  c.fy = 301.5;
+  c.cx = width / 2.0 - 0.5;
+  c.cy = height / 2.0 - 0.5;
+  c.width = width;
+  c.height = height;
+  return c;
+}
+
+TEST(RosStamp, RoundTripsToTheNanosecond) {
+  for (const double t : {0.0, 1.5, 12.000000001, 1305031102.175304, 99.9999999996}) {
+    const RosStamp s = to_ros_stamp(t);
+    EXPECT_LT(s.nanosec, 1000000000u);
+    EXPECT_NEAR(to_seconds(s), t, 1e-6) << t;
+  }
+  EXPECT_EQ(to_ros_stamp(99.9999999996).sec, 100);
+  EXPECT_EQ(to_ros_stamp(1.5).nanosec, 500000000u);
+}
+
+TEST(RosImage, DepthRoundTripsIn16UC1AndIn32FC1) {
+  const DepthImage depth = ramp_depth(13, 7);
+  for (const DepthEncoding e : {DepthEncoding::kMillimetres16, DepthEncoding::kMetres32}) {
+    const RosImageBuffer b = encode_depth_image(depth, e);
+    EXPECT_EQ(b.encoding, to_string(e));
+    EXPECT_EQ(b.data.size(), std::size_t{b.step} * b.height);
+    const DepthImage back = decode_depth_image(b.view(), {});
+    ASSERT_EQ(back.width(), 13);
+    ASSERT_EQ(back.height(), 7);
+    for (std::size_t i = 0; i < depth.size(); ++i)
+      ASSERT_EQ(back[i], depth[i]) << to_string(e) << " pixel " << i;
+  }
+}
+
+TEST(RosImage, PaddedRowsAreRead) {
+  const DepthImage depth = ramp_depth(5, 3);
+  RosImageBuffer b = encode_depth_image(depth, DepthEncoding::kMetres32);
+  RosImageBuffer padded = b;
+  padded.step = b.step + 3;  // odd padding: rows start unaligned
+  padded.data.assign(std::size_t{padded.step} * padded.height, 0xAB);
+  for (std::uint32_t v = 0; v < b.height; ++v)
+    std::memcpy(&padded.data[v * padded.step], &b.data[v * b.step], b.step);
+  const DepthImage back = decode_depth_image(padded.view(), {});
+  for (std::size_t i = 0; i < depth.size(); ++i)
+    ASSERT_EQ(back[i], depth[i]);
+}
+
+TEST(RosImage, InvalidDepthsBecomeZero) {
+  DepthImage d(4, 1);
+  d[0] = std::numeric_limits<float>::quiet_NaN();
+  d[1] = -1.0f;
+  d[2] = std::numeric_limits<float>::infinity();
+  d[3] = 70.0f;  // beyond 65.535 m: does not fit 16UC1
+  for (const DepthEncoding e : {DepthEncoding::kMillimetres16, DepthEncoding::kMetres32}) {
+    const DepthImage back = decode_depth_image(encode_depth_image(d, e).view(), {});
+    EXPECT_EQ(back[0], 0.0f);
+    EXPECT_EQ(back[1], 0.0f);
+    EXPECT_EQ(back[2], 0.0f);
+    EXPECT_EQ(back[3], e == DepthEncoding::kMetres32 ? 70.0f : 0.0f);
+  }
+}
+
+TEST(RosImage, CurvatureAndColourRoundTripBitExact) {
+  Image<Eigen::Vector2f> k(6, 4, Eigen::Vector2f::Zero());
+  for (std::size_t i = 0; i < k.size(); ++i)
+    k[i] = Eigen::Vector2f(1.0f / (1.0f + i), -0.25f * i);
+  k[3] = Eigen::Vector2f::Constant(std::numeric_limits<float>::quiet_NaN());
+  const Image<Eigen::Vector2f> back = decode_curvature_image(encode_curvature_image(k).view(), {});
+  ASSERT_EQ(back.size(), k.size());
+  EXPECT_EQ(std::memcmp(back.data(), k.data(), k.size() * sizeof(Eigen::Vector2f)), 0);
+
+  ColorImage c(3, 2);
+  for (std::size_t i = 0; i < c.size(); ++i)
+    c[i] = Rgb8{std::uint8_t(i), std::uint8_t(2 * i), std::uint8_t(255 - i)};
+  const ColorImage cb = decode_rgb8_image(encode_rgb8_image(c).view(), {});
+  EXPECT_EQ(std::memcmp(cb.data(), c.data(), c.size() * 3), 0);
+}
+
+TEST(RosImage, MalformedImagesAreRejected) {
+  const RosImageBuffer good = encode_depth_image(ramp_depth(8, 4), DepthEncoding::kMillimetres16);
+  auto error = [&](auto&& mutate) {
+    RosImageBuffer b = good;
+    RosImageView v = b.view();
+    mutate(b, v);
+    return input_error_of([&] { decode_depth_image(v, {}); });
+  };
+  EXPECT_EQ(error([](RosImageBuffer&, RosImageView&) {}), "<no error>");
+  EXPECT_EQ(error([](RosImageBuffer&, RosImageView& v) { v.size -= 1; }),
+            "data is 63 bytes, step x height = 64");
+  EXPECT_EQ(error([](RosImageBuffer&, RosImageView& v) { v.step = 8; }),
+            "step 8 < width x 2 bytes = 16");
+  EXPECT_EQ(error([](RosImageBuffer&, RosImageView& v) { v.encoding = "bgr8"; }),
+            "unknown encoding 'bgr8' (expected 16UC1 or 32FC1)");
+  EXPECT_EQ(
+      error([](RosImageBuffer&, RosImageView& v) { v.encoding = std::string_view("\x01z", 2); }),
+      "unknown encoding '?z' (expected 16UC1 or 32FC1)");
+  EXPECT_EQ(error([](RosImageBuffer&, RosImageView& v) { v.width = 0; }), "zero size 0x4");
+  EXPECT_EQ(error([](RosImageBuffer&, RosImageView& v) { v.height = 0; }), "zero size 8x0");
+  EXPECT_EQ(error([](RosImageBuffer&, RosImageView& v) { v.is_bigendian = 1; }),
+            "big-endian data is not supported");
+  EXPECT_EQ(error([](RosImageBuffer&, RosImageView& v) { v.width = 20000; }),
+            "size 20000x4 exceeds the limit of 16384 pixels a side");
+  // 100 MB claimed with 64 bytes sent: rejected before anything is read or allocated.
+  EXPECT_EQ(error([](RosImageBuffer&, RosImageView& v) {
+              v.width = 10000;
+              v.height = 5000;
+              v.step = 20000;
+            }),
+            "claimed size step x height = 100000000 bytes exceeds the limit of 67108864");
+  // The largest values the fields can hold do not overflow the checks.
+  EXPECT_NE(error([](RosImageBuffer&, RosImageView& v) {
+              v.width = v.height = 16384;
+              v.step = 0xFFFFFFFFu;
+            }),
+            "<no error>");
+  EXPECT_EQ(error([](RosImageBuffer&, RosImageView& v) { v.data = nullptr; }),
+            "data is 64 bytes, step x height = 64");
+}
+
+TEST(RosImage, LimitsComeFromTheConfig) {
+  const RosImageBuffer b = encode_depth_image(ramp_depth(8, 4), DepthEncoding::kMetres32);
+  RosImageLimits limits;
+  limits.max_bytes = 100;
+  EXPECT_EQ(input_error_of([&] { decode_depth_image(b.view(), limits); }),
+            "claimed size step x height = 128 bytes exceeds the limit of 100");
+  limits = {};
+  limits.max_side = 7;
+  EXPECT_EQ(input_error_of([&] { decode_depth_image(b.view(), limits); }),
+            "size 8x4 exceeds the limit of 7 pixels a side");
+  DdsConfig config;
+  EXPECT_EQ(config.max_image_bytes(), std::size_t{64} << 20);
+}
+
+TEST(RosCameraInfo, EncodeDecodeRoundTrip) {
+  CameraIntrinsics c = small_camera(80, 60);
+  c.distortion = {0.1, -0.2, 0.001, 0.002, 0.03};
+  const CameraIntrinsics back = decode_camera_info(encode_camera_info(c), {});
+  EXPECT_EQ(back.fx, c.fx);
+  EXPECT_EQ(back.fy, c.fy);
+  EXPECT_EQ(back.cx, c.cx);
+  EXPECT_EQ(back.cy, c.cy);
+  EXPECT_EQ(back.width, 80);
+  EXPECT_EQ(back.height, 60);
+  EXPECT_EQ(back.distortion, c.distortion);
+  RosCameraInfo rational = encode_camera_info(c);
+  rational.distortion_model = "rational_polynomial";
+  rational.d.resize(8, 0.0);
+  EXPECT_EQ(decode_camera_info(rational, {}).distortion, c.distortion);
+}
+
+TEST(RosCameraInfo, MalformedCameraInfoIsRejected) {
+  const RosCameraInfo good = encode_camera_info(small_camera(80, 60));
+  auto error = [&](auto&& mutate) {
+    RosCameraInfo info = good;
+    mutate(info);
+    return input_error_of([&] { decode_camera_info(info, {}); });
+  };
+  EXPECT_EQ(error([](RosCameraInfo&) {}), "<no error>");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.k[0] = 0.0; }),
+            "camera_info focal lengths fx = 0.000000, fy = 301.500000 must be positive");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.k[4] = -5.0; }),
+            "camera_info focal lengths fx = 300.000000, fy = -5.000000 must be positive");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.k[2] = std::nan(""); }), "camera_info K is not finite");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.k[8] = 0.0; }),
+            "camera_info K is not a pinhole matrix [fx s cx; 0 fy cy; 0 0 1]");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.width = 0; }), "camera_info has zero size 0x60");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.binning_x = 2; }),
+            "camera_info binning is not supported");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.distortion_model = "equidistant"; }),
+            "camera_info distortion model 'equidistant' is not supported");
+  EXPECT_EQ(error([](RosCameraInfo& i) {
+              i.distortion_model = "rational_polynomial";
+              i.d = {0, 0, 0, 0, 0, 0.5, 0, 0};
+            }),
+            "camera_info D has non-zero terms beyond k3 (only k1, k2, p1, p2, k3 are supported)");
+  EXPECT_EQ(error([](RosCameraInfo& i) {
+              i.distortion_model = "";
+              i.d = {0.1};
+            }),
+            "camera_info D without a distortion model");
+  EXPECT_EQ(error([](RosCameraInfo& i) {
+              i.distortion_model = "";
+              i.d.clear();
+            }),
+            "<no error>");
+}
+
+TEST(RosDepthFrame, FrameMatchesTheCameraAndTheStamp) {
+  const CameraIntrinsics camera = small_camera(8, 4);
+  const RosImageBuffer b = encode_depth_image(ramp_depth(8, 4), DepthEncoding::kMillimetres16);
+  const Frame f = decode_depth_frame(b.view(), RosStamp{12, 250000000}, camera, {});
+  EXPECT_EQ(f.timestamp, 12.25);
+  EXPECT_EQ(f.camera.fx, camera.fx);
+  EXPECT_EQ(f.camera.depth_scale, 1000.0);
+  EXPECT_EQ(f.depth.width(), 8);
+  EXPECT_TRUE(f.color.empty());
+  const RosImageBuffer m = encode_depth_image(ramp_depth(8, 4), DepthEncoding::kMetres32);
+  EXPECT_EQ(decode_depth_frame(m.view(), RosStamp{}, camera, {}).camera.depth_scale, 1.0);
+
+  EXPECT_EQ(input_error_of([&] { decode_depth_frame(b.view(), {}, small_camera(8, 5), {}); }),
+            "image size 8x4 differs from camera_info size 8x5");
+  EXPECT_EQ(input_error_of([&] {
+              decode_depth_frame(b.view(), RosStamp{1, 1000000000u}, camera, {});
+            }),
+            "stamp nanosec 1000000000 is not below 10^9");
+}
+
+TEST(DepthEncoding, ParsesTheTwoRosDepthEncodings) {
+  EXPECT_EQ(parse_depth_encoding("16UC1"), DepthEncoding::kMillimetres16);
+  EXPECT_EQ(parse_depth_encoding("32FC1"), DepthEncoding::kMetres32);
+  EXPECT_EQ(input_error_of([] { parse_depth_encoding("mono8"); }),
+            "unknown depth encoding 'mono8' (expected 16UC1 or 32FC1)");
+}
+
+TEST(DdsConfig, YamlSectionMapsOntoTheStruct) {
+  const Params p = parse_params(
+      "dds:\n  domain_id: 7\n  topic_prefix: rt/robot/\n  depth_topic: rt/d\n"
+      "  input_reliability: best_effort\n  max_image_megabytes: 8\n",
+      "p.yaml");
+  EXPECT_EQ(p.dds.domain_id, 7);
+  EXPECT_EQ(p.dds.topic_prefix, "rt/robot/");
+  EXPECT_EQ(p.dds.depth_topic, "rt/d");
+  EXPECT_EQ(p.dds.camera_info_topic, "rt/camera/depth/camera_info");
+  EXPECT_FALSE(p.dds.input_reliable);
+  EXPECT_FALSE(p.dds.depth_qos().reliable);
+  EXPECT_EQ(p.dds.max_image_bytes(), std::size_t{8} << 20);
+  EXPECT_EQ(parse_params("", "e.yaml").dds.topic_prefix, "rt/jpcr/");
+  EXPECT_EQ(input_error_of([] { parse_params("dds:\n  domain_id: 300\n", "p.yaml"); }),
+            "p.yaml:2: key 'dds.domain_id': must be in 0..232");
+  EXPECT_EQ(input_error_of([] {
+              parse_params("dds:\n  domian_id: 3\n", "p.yaml");
+            }).find("domian_id") != std::string::npos,
+            true);
+  EXPECT_NE(input_error_of([] { parse_params("dds:\n  input_reliability: maybe\n", "p.yaml"); }),
+            "<no error>");
+}
+
+TEST(DdsConfig, DefaultYamlStatesTheBuiltInDefaults) {
+  const DdsConfig shipped = load_params(std::string(JPCR_SOURCE_DIR) + "/configs/default.yaml").dds;
+  const DdsConfig built_in;
+  EXPECT_EQ(shipped.domain_id, built_in.domain_id);
+  EXPECT_EQ(shipped.cyclone_uri, built_in.cyclone_uri);
+  EXPECT_EQ(shipped.topic_prefix, built_in.topic_prefix);
+  EXPECT_EQ(shipped.depth_topic, built_in.depth_topic);
+  EXPECT_EQ(shipped.camera_info_topic, built_in.camera_info_topic);
+  EXPECT_EQ(shipped.world_frame_id, built_in.world_frame_id);
+  EXPECT_EQ(shipped.camera_frame_id, built_in.camera_frame_id);
+  EXPECT_EQ(shipped.history_depth, built_in.history_depth);
+  EXPECT_EQ(shipped.image_history_depth, built_in.image_history_depth);
+  EXPECT_EQ(shipped.input_reliable, built_in.input_reliable);
+  EXPECT_EQ(shipped.max_image_megabytes, built_in.max_image_megabytes);
+  EXPECT_EQ(shipped.max_image_side, built_in.max_image_side);
+}
+
+}  // namespace
+}  // namespace jpcr

@@ -1,0 +1,303 @@
+// Quad IT and Quad LS on rendered frames: known curvature of spheres, cylinders and planes,
+// invariance under rigid motion, invalid pixels flagged (never 0), and Quad IT beating Quad LS
+// under the paper's range noise.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "jpcr/quadric/least_squares_quadric.hpp"
+#include "jpcr/quadric/quadric_fit.hpp"
+#include "jpcr/quadric/se3.hpp"
+#include "quadric_test_scenes.hpp"
+
+namespace jpcr {
+namespace {
+
+using test::interior_pixels;
+using test::look_from;
+using test::room_with;
+
+struct Fitted {
+  SyntheticFrame frame;
+  QuadricMap map;
+};
+
+Fitted fit_scene(const SyntheticScene& scene, const CameraIntrinsics& camera,
+                 const Eigen::Isometry3d& pose, const CurvatureEstimator& estimator,
+                 const std::string& noise = "none") {
+  Fitted f{render(scene, camera, pose, parse_noise(noise), 1), {}};
+  f.map = estimator.estimate(compute_vertex_map(f.frame.frame.depth, camera));
+  return f;
+}
+
+// The model z = ½ uᵀKu drops the ρ⁴/(8R³) term of a sphere, a relative bias of about ρ²/(4R²).
+// Seen obliquely the pattern's footprint stretches by 1/cos θ, so the bias grows as 1/cos² θ:
+// measured 0.5 % at the centre of the ball and 2.1–2.3 % at 56–59° incidence. The bound,
+// 2 % of 1/R, is checked where the incidence is below 45° (bias ≤ 1.3 %), and 3 % everywhere on
+// the interior.
+class SphereCurvature : public ::testing::TestWithParam<double> {};
+
+double worst_error(const QuadricMap& map, const std::vector<std::pair<int, int>>& pixels,
+                   const Eigen::Vector2d& expected) {
+  double worst = 0.0;
+  for (const auto& [u, v] : pixels) {
+    if (!map.valid(u, v)) return INFINITY;
+    const Eigen::Vector2d k = map.curvature(u, v).cast<double>();
+    worst = std::max(worst, (k - expected).cwiseAbs().maxCoeff());
+  }
+  return worst;
+}
+
+TEST_P(SphereCurvature, QuadItRecoversMinusOneOverR) {
+  const double R = GetParam();
+  const CameraIntrinsics camera = synthetic_camera(320, 240);
+  const Eigen::Vector3d centre(0, 0, 1.2);
+  // Seen from 4.5 R, the ball fills about a third of the image.
+  const Eigen::Isometry3d pose =
+      look_from(centre + Eigen::Vector3d(0.3 * R, -4.5 * R, 0.5 * R), centre);
+  const QuadricFit fit;
+  const Fitted f = fit_scene(room_with(Sphere{centre, R}), camera, pose, fit);
+  const NeighbourhoodPattern pattern = fit.params().pattern.for_width(camera.width);
+  const auto facing = interior_pixels(f.frame, 1, pattern, false, 45.0);
+  const auto interior = interior_pixels(f.frame, 1, pattern);
+  ASSERT_GT(facing.size(), 2000u);
+  const Eigen::Vector2d expected = Eigen::Vector2d::Constant(-1.0 / R);
+  EXPECT_LT(worst_error(f.map, facing, expected), 0.02 / R) << "R = " << R;
+  EXPECT_LT(worst_error(f.map, interior, expected), 0.03 / R) << "R = " << R;
+}
+
+INSTANTIATE_TEST_SUITE_P(RadiiFrom10cmTo1m, SphereCurvature,
+                         ::testing::Values(0.1, 0.25, 0.5, 1.0));
+
+TEST(QuadricFit, CylinderGivesZeroAndMinusOneOverR) {
+  const double R = 0.2;
+  const CameraIntrinsics camera = synthetic_camera(320, 240);
+  const Cylinder cylinder{{0, 0, 1.5}, Eigen::Vector3d::UnitZ(), R, 0.0, true};
+  const QuadricFit fit;
+  const Fitted f =
+      fit_scene(room_with(cylinder), camera, look_from({0.1, -1.0, 1.3}, {0, 0, 1.2}), fit);
+  const NeighbourhoodPattern pattern = fit.params().pattern.for_width(camera.width);
+  const auto facing = interior_pixels(f.frame, 1, pattern, false, 45.0);
+  ASSERT_GT(facing.size(), 2000u);
+  EXPECT_LT(worst_error(f.map, facing, Eigen::Vector2d(0.0, -1.0 / R)), 0.02 / R);
+  EXPECT_LT(
+      worst_error(f.map, interior_pixels(f.frame, 1, pattern), Eigen::Vector2d(0.0, -1.0 / R)),
+      0.03 / R);
+}
+
+TEST(QuadricFit, PlanesOfARoomAreFlatAndNormalsFaceTheCamera) {
+  const CameraIntrinsics camera = synthetic_camera(320, 240);
+  const QuadricFit fit;
+  const Fitted f = fit_scene(room_with(Sphere{{3, 3, 1}, 0.1}), camera,
+                             look_from({-1, -1, 1.5}, {2, 4, 0.5}), fit);
+  const auto pixels =
+      interior_pixels(f.frame, 0, fit.params().pattern.for_width(camera.width), true);
+  ASSERT_GT(pixels.size(), 5000u);
+  const NormalMap normals = f.map.normals();
+  const VertexMap vertices = compute_vertex_map(f.frame.frame.depth, camera);
+  for (const auto& [u, v] : pixels) {
+    ASSERT_TRUE(f.map.valid(u, v));
+    // Float depth at 2–6 m rounds to ~3e-7 m; over a 5 cm pattern that is ~1e-3 1/m.
+    EXPECT_NEAR(f.map.curvature(u, v).x(), 0.0, 0.01);
+    EXPECT_NEAR(f.map.curvature(u, v).y(), 0.0, 0.01);
+    EXPECT_LT(normals(u, v).dot(vertices(u, v)), 0.0f);
+    EXPECT_GT(normals(u, v).dot(f.frame.normals(u, v)), std::cos(0.1 * M_PI / 180.0));
+  }
+}
+
+// Moving the camera and the scene by one rigid motion G leaves the depth image, and so every
+// curvature, unchanged up to the renderer's float rounding.
+TEST(QuadricFit, CurvatureIsInvariantUnderARigidMotionOfCameraAndScene) {
+  const CameraIntrinsics camera = synthetic_camera(320, 240);
+  const Eigen::Isometry3d G = se3_exp((Vector6d() << 0.7, -1.3, 0.4, 0.3, -0.5, 1.1).finished());
+  const Sphere ball{{0, 0, 1.0}, 0.3};
+  const Plane floor{{0, 0, 0}, Eigen::Vector3d::UnitZ()};
+  SyntheticScene scene, moved;
+  scene.surfaces = {floor, ball};
+  moved.surfaces = {Plane{G * floor.point, G.linear() * floor.normal},
+                    Sphere{G * ball.center, ball.radius}};
+  const Eigen::Isometry3d pose = look_from({0.2, -1.4, 1.3}, {0, 0, 0.8});
+  const QuadricFit fit;
+  const Fitted a = fit_scene(scene, camera, pose, fit);
+  const Fitted b = fit_scene(moved, camera, G * pose, fit);
+  int compared = 0;
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      ASSERT_EQ(a.map.valid(u, v), b.map.valid(u, v));
+      if (!a.map.valid(u, v)) continue;
+      EXPECT_NEAR(a.map.curvature(u, v).x(), b.map.curvature(u, v).x(), 1e-2);
+      EXPECT_NEAR(a.map.curvature(u, v).y(), b.map.curvature(u, v).y(), 1e-2);
+      ++compared;
+    }
+  }
+  EXPECT_GT(compared, camera.width * camera.height / 2);
+}
+
+// Rotating every vertex about the camera centre changes the local frames' gauge (e_x) but not the
+// surface, so κ₁, κ₂ stay; the LM damping on the diagonal is the only non-invariant term.
+TEST(QuadricFit, CurvatureIsInvariantUnderARotationOfTheVertices) {
+  const CameraIntrinsics camera = synthetic_camera(320, 240);
+  const QuadricFit fit;
+  const SyntheticFrame f =
+      render(room_with(Sphere{{0, 0, 1.2}, 0.3}), camera, look_from({0.1, -1.2, 1.4}, {0, 0, 1.2}));
+  const VertexMap vertices = compute_vertex_map(f.frame.depth, camera);
+  VertexMap rotated = vertices;
+  const Eigen::Matrix3f Q = so3_exp(Eigen::Vector3d(0.3, -0.2, 0.5)).cast<float>();
+  for (Eigen::Vector3f& X : rotated)
+    if (is_valid(X)) X = Q * X;
+  const QuadricMap a = fit.estimate(vertices), b = fit.estimate(rotated);
+  const NeighbourhoodPattern pattern = fit.params().pattern.for_width(camera.width);
+  std::vector<std::pair<int, int>> pixels = interior_pixels(f, 1, pattern);
+  const auto walls = interior_pixels(f, 0, pattern, true);
+  pixels.insert(pixels.end(), walls.begin(), walls.end());
+  ASSERT_GT(pixels.size(), 20000u);
+  for (const auto& [u, v] : pixels) {
+    ASSERT_TRUE(a.valid(u, v) && b.valid(u, v));
+    EXPECT_NEAR(a.curvature(u, v).x(), b.curvature(u, v).x(), 2e-3);
+    EXPECT_NEAR(a.curvature(u, v).y(), b.curvature(u, v).y(), 2e-3);
+  }
+}
+
+TEST(QuadricFit, AllZeroDepthGivesAnAllInvalidMap) {
+  const CameraIntrinsics camera = synthetic_camera(160, 120);
+  const DepthImage depth(camera.width, camera.height, 0.0f);
+  for (const CurvatureEstimator* e : std::initializer_list<const CurvatureEstimator*>{
+           new QuadricFit(), new LeastSquaresQuadric()}) {
+    const QuadricMap map = e->estimate(compute_vertex_map(depth, camera));
+    EXPECT_EQ(map.valid_count(), 0u) << e->name();
+    EXPECT_EQ(summarize(map).no_centre, depth.size());
+    for (const Eigen::Vector2f& k : map.curvature)
+      ASSERT_TRUE(std::isnan(k.x()) && std::isnan(k.y())) << e->name();
+    delete e;
+  }
+}
+
+TEST(QuadricFit, IsolatedPixelsAreFlaggedNotZero) {
+  const CameraIntrinsics camera = synthetic_camera(160, 120);
+  DepthImage depth(camera.width, camera.height, 0.0f);
+  // A sparse grid: every 7th pixel, so a pattern (stride 1 at this width) sees < 10 samples.
+  for (int v = 0; v < camera.height; v += 7)
+    for (int u = 0; u < camera.width; u += 7)
+      depth(u, v) = 2.0f;
+  depth(80, 60) = std::numeric_limits<float>::quiet_NaN();
+  const QuadricMap map = QuadricFit().estimate(compute_vertex_map(depth, camera));
+  EXPECT_EQ(map.valid_count(), 0u);
+  const QuadricMapSummary s = summarize(map);
+  EXPECT_GT(s.no_normal + s.too_few_samples, 0u);
+  for (const Eigen::Vector2f& k : map.curvature)
+    ASSERT_TRUE(std::isnan(k.x()));
+}
+
+double rms_error(const QuadricMap& map, const CurvatureImage& gt, const QuadricMap& other) {
+  double sum = 0.0;
+  int n = 0;
+  for (int v = 0; v < map.height(); ++v) {
+    for (int u = 0; u < map.width(); ++u) {
+      if (!map.valid(u, v) || !other.valid(u, v) || !std::isfinite(gt(u, v).x())) continue;
+      sum += (map.curvature(u, v) - gt(u, v)).squaredNorm();
+      n += 2;
+    }
+  }
+  return n > 0 ? std::sqrt(sum / n) : NAN;
+}
+
+// Under range noise of k % the weight constant and the gate follow the noise (n₀ = gate = 3σ with
+// σ = k % of the range, quadric_fit_kernel.hpp); measured RMS at 1 %: Quad IT 3.0, Quad LS 3.5.
+TEST(QuadricFit, QuadItBeatsQuadLsUnderRangeNoise) {
+  const CameraIntrinsics camera = synthetic_camera(320, 240);
+  const SyntheticScene scene = room_with(Sphere{{0, 0, 1.2}, 0.3});
+  const Eigen::Isometry3d pose = look_from({0.1, -1.2, 1.4}, {0, 0, 1.2});
+  const LeastSquaresQuadric ls;
+  for (double k : {0.5, 1.0}) {
+    QuadricParams params;
+    params.fit.fair_n0_per_range = params.fit.gate_per_range = static_cast<float>(3 * k / 100);
+    const QuadricFit it(params);
+    const std::string noise = "range:" + std::to_string(k);
+    const Fitted a = fit_scene(scene, camera, pose, it, noise);
+    const Fitted b = fit_scene(scene, camera, pose, ls, noise);
+    const double e_it = rms_error(a.map, a.frame.curvature, b.map);
+    const double e_ls = rms_error(b.map, b.frame.curvature, a.map);
+    EXPECT_LT(e_it, e_ls) << noise;
+  }
+}
+
+TEST(LeastSquaresQuadric, RecoversSphereAndPlaneWithoutNoise) {
+  const double R = 0.3;
+  const CameraIntrinsics camera = synthetic_camera(320, 240);
+  const LeastSquaresQuadric ls;
+  const Fitted f = fit_scene(room_with(Sphere{{0, 0, 1.2}, R}), camera,
+                             look_from({0.1, -1.35, 1.4}, {0, 0, 1.2}), ls);
+  const NeighbourhoodPattern pattern = ls.params().pattern.for_width(camera.width);
+  for (int index : {0, 1}) {
+    // Unweighted, Quad LS feels the sphere's ρ⁴ term more than Quad IT: 3 % where it faces the
+    // camera (incidence below 45°).
+    const auto pixels = interior_pixels(f.frame, index, pattern, index == 0, 45.0);
+    ASSERT_GT(pixels.size(), 500u);
+    for (const auto& [u, v] : pixels) {
+      ASSERT_TRUE(f.map.valid(u, v));
+      const Eigen::Vector2f gt = f.frame.curvature(u, v);
+      EXPECT_NEAR(f.map.curvature(u, v).x(), gt.x(), 0.03 / R);
+      EXPECT_NEAR(f.map.curvature(u, v).y(), gt.y(), 0.03 / R);
+    }
+  }
+}
+
+TEST(HeightField, ShapeOperatorOfATiltedParaboloid) {
+  // z = x² + 0 + 0.5 y² at the origin with no slope: κ = (2, 1) exactly.
+  const Eigen::Vector2d k = height_field_curvatures({1.0, 0.0, 0.5, 0.0, 0.0, 0.0});
+  EXPECT_NEAR(k.x(), 2.0, 1e-12);
+  EXPECT_NEAR(k.y(), 1.0, 1e-12);
+  EXPECT_LT((height_field_direction({1.0, 0.0, 0.5, 0, 0, 0}).cwiseAbs() - Eigen::Vector3d::UnitX())
+                .norm(),
+            1e-12);
+  // With a slope D, the normal curvature along x of z = A x² + D x is 2A / (1 + D²)^{3/2}.
+  const double A = 1.0, D = 0.5;
+  const Eigen::Vector2d ks = height_field_curvatures({A, 0.0, 0.0, D, 0.0, 0.0});
+  EXPECT_NEAR(ks.x(), 2 * A / std::pow(1 + D * D, 1.5), 1e-12);
+  EXPECT_NEAR(ks.y(), 0.0, 1e-12);
+}
+
+}  // namespace
+}  // namespace jpcr
+
+namespace jpcr {
+namespace {
+
+// The CPU fit (gathered float samples, SIMD) and the per-pixel reference kernel that the CUDA
+// code runs (fit_quadric_pixel, here in double) implement the same iteration: on a noisy frame
+// they agree to float rounding, far below the 1e-4 1/m RMS the GPU parity test asks.
+TEST(QuadricFit, CpuFitEqualsTheReferenceKernel) {
+  const CameraIntrinsics camera = synthetic_camera(160, 120);
+  const SyntheticFrame f =
+      render(test::room_with(Sphere{{0, 0, 1.2}, 0.3}), camera,
+             test::look_from({0.1, -1.2, 1.4}, {0, 0, 1.2}), parse_noise("range:0.5"), 3);
+  const VertexMap vertices = compute_vertex_map(f.frame.depth, camera);
+  const NormalMap normals = estimate_normals(vertices);
+  const QuadricFit fit;
+  const QuadricMap map = fit.estimate(vertices, normals);
+  const NeighbourhoodPattern pattern = fit.params().pattern.for_width(camera.width);
+  const VertexView view{vertices.data(), vertices.width(), vertices.height()};
+  double sum = 0.0;
+  int n = 0, status_mismatch = 0;
+  for (int v = 0; v < camera.height; ++v) {
+    for (int u = 0; u < camera.width; ++u) {
+      Quadricd q;
+      const QuadricStatus s = fit_quadric_pixel<double>(
+          view, pattern.offsets.data(), pattern.size(), u, v, normals(u, v), fit.params().fit, q);
+      if (s != map.status(u, v)) {
+        ++status_mismatch;  // a sample exactly at the gate may fall either way in float
+        continue;
+      }
+      if (s != QuadricStatus::kValid) continue;
+      const Eigen::Vector2d k = principal_curvatures(q.a, q.b, q.c);
+      sum += (k - map.curvature(u, v).cast<double>()).squaredNorm();
+      n += 2;
+    }
+  }
+  ASSERT_GT(n, camera.width * camera.height);
+  EXPECT_LT(status_mismatch, camera.width * camera.height / 1000);
+  EXPECT_LT(std::sqrt(sum / n), 1e-3);
+}
+
+}  // namespace
+}  // namespace jpcr

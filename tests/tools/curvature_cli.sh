@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# jpcr_curvature and jpcr_eval curvature end to end: maps, PNGs, PLYs and summary written for
+# Quad IT and Quad LS; the ground truth against itself is exactly 0 with full coverage; numpy
+# reads the maps; an all-zero depth frame gives a warning and an all-NaN map, not a crash; bad
+# input gives one clear message and the documented exit code.
+set -uo pipefail
+build=$1 src=$2
+synth=$build/tools/jpcr_synth
+curv=$build/tools/jpcr_curvature
+eval_bin=$build/tools/jpcr_eval
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+# shellcheck source=expect.sh
+source "$src/tests/tools/expect.sh"
+
+expect 0 "wrote 3 frames" -- "$synth" --scene room_spheres --frames 3 --noise range:0.5 \
+  --size 160x120 --seed 2 --out "$tmp/seq"
+expect 0 "wrote 3 curvature maps" -- "$curv" --dataset "$tmp/seq" --method it --out "$tmp/it" --ply
+expect 0 "wrote 2 curvature maps" -- "$curv" --dataset "$tmp/seq" --method ls --frames 1:3 --out "$tmp/ls"
+for d in curvature curvature_png ply; do
+  n=$(ls "$tmp/it/$d" | wc -l)
+  [ "$n" = 3 ] || { echo "FAIL: it/$d has $n files, want 3"; fail=1; }
+done
+[ -s "$tmp/it/summary.json" ] || { echo "FAIL: no summary.json"; fail=1; }
+head -c 600 "$tmp/it/ply/0.000000.ply" | grep -q "property float k1" || { echo "FAIL: PLY header"; fail=1; }
+
+# The ground truth against itself: 0 error, full coverage. Estimates: finite error, 2 frames for LS.
+expect 0 "rms k1 0.0000 1/m  rms k2 0.0000" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/seq"
+expect 0 "coverage 100.00 %" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/seq"
+expect 0 "frames: 2 compared" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/ls"
+"$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --json --out "$tmp/it.json" > /dev/null ||
+  { echo "FAIL: eval json"; fail=1; }
+if /usr/bin/python3 -c 'import numpy' 2>/dev/null; then
+  /usr/bin/python3 - "$tmp" <<'PY' || fail=1
+import glob, json, sys, numpy as np
+t = sys.argv[1]
+r = json.load(open(t + "/it.json"))
+assert r["frames"] == 3 and 0.9 < r["coverage"] <= 1.0, r
+assert 0 < r["rms"] < 50, r
+k = np.load(sorted(glob.glob(t + "/it/curvature/*.npy"))[0])
+assert k.shape == (120, 160, 2) and k.dtype == np.float32, (k.shape, k.dtype)
+valid = np.isfinite(k[..., 0])
+assert valid.mean() > 0.9 and np.all(k[valid][:, 0] >= k[valid][:, 1])
+s = json.load(open(t + "/it/summary.json"))
+assert s["method"] == "quad-it" and len(s["frames"]) == 3
+PY
+fi
+
+# A frame with no depth at all (nothing in view): a warning and an all-NaN map, exit 0.
+cat > "$tmp/empty.yaml" <<'YAML'
+view: {eye: [0, 0, 0], target: [0, 1, 0]}
+surfaces:
+  - {type: sphere, center: [0, -100, 0], radius: 0.1}
+YAML
+expect 0 "wrote 1 frames" -- "$synth" --scene "$tmp/empty.yaml" --frames 1 --size 160x120 --out "$tmp/empty"
+expect 0 "warning: frame 0 .* no valid curvature" -- "$curv" --dataset "$tmp/empty" --out "$tmp/empty_it"
+
+# Bad input.
+expect 1 "error: .*missing_dir" -- "$curv" --dataset "$tmp/missing_dir" --out "$tmp/x"
+expect 2 "--method must be 'it'" -- "$curv" --dataset "$tmp/seq" --method cubic --out "$tmp/x"
+expect 2 "selects no frame" -- "$curv" --dataset "$tmp/seq" --frames 5:9 --out "$tmp/x"
+expect 1 "no curvature/ directory" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/missing_dir"
+printf 'quadric:\n  fit:\n    iterations: many\n' > "$tmp/bad.yaml"
+expect 1 "iterations" -- "$curv" --dataset "$tmp/seq" --params "$tmp/bad.yaml" --out "$tmp/x"
+expect 0 "Quad LS" -- "$curv" --help
+exit $fail

@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# jpcr_dds_play and jpcr_dds_echo over real Cyclone DDS on loopback, as separate processes: the
+# TUM test frames played as 16UC1 arrive at jpcr_dds_echo with their camera_info; SIGINT stops
+# the player cleanly; bad command lines and inputs give one clear message and the documented code.
+set -uo pipefail
+build=$1 src=$2 data=$3
+play=$build/tools/jpcr_dds_play
+echo_bin=$build/tools/jpcr_dds_echo
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+# shellcheck source=expect.sh
+source "$src/tests/tools/expect.sh"
+export CYCLONEDDS_URI="file://$src/configs/cyclonedds_loopback.xml"
+domain=$(( $$ % 200 + 1 ))
+tum=$data/tum_fr1_xyz_20
+cam=$src/configs/tum_fr1.yaml
+
+# Depth and camera_info of frames 3..7 reach two echo processes started first.
+"$echo_bin" rt/camera/depth/image_raw --domain $domain --count 5 --timeout 30 > "$tmp/depth.txt" 2>&1 &
+echo_depth=$!
+"$echo_bin" rt/camera/depth/camera_info --domain $domain --count 5 --timeout 30 > "$tmp/info.txt" 2>&1 &
+echo_info=$!
+expect 0 "published 5 frames" -- "$play" --dataset "$tum" --config "$cam" --frames 3:8 \
+  --as-fast-as-possible --domain $domain --wait-subscribers 15
+wait $echo_depth || { echo "FAIL: echo of depth exited $?"; cat "$tmp/depth.txt"; fail=1; }
+wait $echo_info || { echo "FAIL: echo of camera_info exited $?"; cat "$tmp/info.txt"; fail=1; }
+n=$(grep -c "^image stamp=1305031102\.[0-9]* frame=camera_depth_optical_frame 640x480 16UC1 step=1280 bytes=614400 valid=" "$tmp/depth.txt")
+[ "$n" = 5 ] || { echo "FAIL: $n of 5 depth lines"; cat "$tmp/depth.txt"; fail=1; }
+grep -q "stamp=1305031102.262886" "$tmp/depth.txt" || { echo "FAIL: frame 3 stamp"; cat "$tmp/depth.txt"; fail=1; }
+n=$(grep -c "^camera_info .* 640x480 fx=517.300 fy=516.500 cx=318.600 cy=255.300 model=plumb_bob$" "$tmp/info.txt")
+[ "$n" = 5 ] || { echo "FAIL: $n of 5 camera_info lines"; cat "$tmp/info.txt"; fail=1; }
+echo "ok: 5 depth images and 5 camera_infos received from jpcr_dds_play"
+
+# At the recorded rate, SIGINT stops the player between frames with exit 0.
+"$play" --dataset "$tum" --config "$cam" --rate 0.05 --domain $domain --wait-subscribers 0 \
+  > "$tmp/slow.txt" 2>&1 &
+slow=$!
+sleep 1.5; kill -INT $slow; wait $slow; rc=$?
+if [ "$rc" != 0 ] || ! grep -q "stopped by signal" "$tmp/slow.txt"; then
+  echo "FAIL: SIGINT: exit $rc"; cat "$tmp/slow.txt"; fail=1
+else
+  echo "ok: SIGINT stops jpcr_dds_play: $(tail -1 "$tmp/slow.txt")"
+fi
+
+# Nothing published: the wait is bounded and fewer samples than --count is an error.
+expect 1 "received 0 of 1 samples on rt/jpcr/odom within 0.5 s" -- \
+  "$echo_bin" rt/jpcr/odom --domain $domain --count 1 --timeout 0.5
+expect 0 "" -- "$echo_bin" rt/jpcr/path --domain $domain --timeout 0.2
+
+# Bad command lines and inputs.
+expect 0 "usage: jpcr_dds_play" -- "$play" --help
+expect 0 "usage: jpcr_dds_echo TOPIC" -- "$echo_bin" --help
+expect 2 "dataset is required" -- "$play"
+expect 2 "missing argument TOPIC" -- "$echo_bin"
+expect 2 "encoding: unknown depth encoding 'bgr8'" -- "$play" --dataset "$tum" --encoding bgr8
+expect 2 "frames 5:2 selects no frame" -- "$play" --dataset "$tum" --config "$cam" --frames 5:2
+expect 2 "frames expects FIRST:END" -- "$play" --dataset "$tum" --config "$cam" --frames 7
+expect 2 "rate must be positive" -- "$play" --dataset "$tum" --rate 0
+expect 2 "domain must be in 0..232" -- "$echo_bin" rt/x --domain 300
+expect 2 "type must be odom, pose, path, image, camera_info or keyframe, got 'twist'" -- \
+  "$echo_bin" rt/x --type twist
+expect 1 "error: .*nosuch" -- "$play" --dataset "$tmp/nosuch"
+printf 'dds:\n  domain_id: 3\n  topic_prefx: x\n' > "$tmp/bad.yaml"
+expect 1 "bad.yaml:3: unknown key .dds.topic_prefx." -- "$echo_bin" rt/x --params "$tmp/bad.yaml"
+exit $fail

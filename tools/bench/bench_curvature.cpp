@@ -1,0 +1,57 @@
+// Speed of the single-frame curvature estimators (issue 4: Quad IT ≤ 150 ms per 640x480 frame
+// with the reference 129-sample pattern and 3 iterations, on 2 cores). Each benchmark estimates
+// one rendered room_spheres frame with range:1 noise; normals are included (they are part of
+// what a caller pays). Arguments: image width (the height is 3/4 of it).
+#include <benchmark/benchmark.h>
+
+#include "jpcr/io/synthetic_sequence.hpp"
+#include "jpcr/quadric/least_squares_quadric.hpp"
+
+namespace {
+
+jpcr::VertexMap frame(int width) {
+  jpcr::SyntheticSequenceOptions options;
+  options.frames = 1;
+  options.noise = "range:1";
+  options.width = width;
+  options.height = width * 3 / 4;
+  const jpcr::SyntheticSequence seq = jpcr::make_synthetic_sequence(options);
+  const jpcr::Frame f = seq.load(0);
+  return jpcr::compute_vertex_map(f.depth, f.camera);
+}
+
+template <typename Estimator>
+void run(benchmark::State& state) {
+  const jpcr::VertexMap vertices = frame(static_cast<int>(state.range(0)));
+  const Estimator estimator;
+  std::size_t valid = 0;
+  for (auto _ : state) {
+    const jpcr::QuadricMap map = estimator.estimate(vertices);
+    valid = map.valid_count();
+    benchmark::DoNotOptimize(valid);
+  }
+  state.counters["valid_px"] = static_cast<double>(valid);
+  state.counters["samples"] = estimator.params().pattern.for_width(vertices.width()).size();
+  state.SetItemsProcessed(state.iterations());
+}
+
+void BM_QuadIT(benchmark::State& state) {
+  run<jpcr::QuadricFit>(state);
+}
+void BM_QuadLS(benchmark::State& state) {
+  run<jpcr::LeastSquaresQuadric>(state);
+}
+
+void BM_Normals(benchmark::State& state) {
+  const jpcr::VertexMap vertices = frame(static_cast<int>(state.range(0)));
+  for (auto _ : state)
+    benchmark::DoNotOptimize(jpcr::estimate_normals(vertices));
+}
+
+BENCHMARK(BM_QuadIT)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_QuadLS)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Normals)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -1,0 +1,121 @@
+// jpcr_dds_echo: subscribes to one DDS topic of a ROS 2 type and prints one summary line per
+// sample (stamp, frame, pose or image layout, whether an image decodes and why not).
+#include <algorithm>
+#include <chrono>
+#include <iostream>
+
+#include "cli/arguments.hpp"
+#include "cli/dds_options.hpp"
+#include "cli/stop_signal.hpp"
+#include "jpcr/io/dds/ros_messages.hpp"
+#include "jpcr_dds_echo/message_summary.hpp"
+
+namespace jpcr {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+const std::vector<std::string> kTypes = {"odom",  "pose",        "path",
+                                         "image", "camera_info", "keyframe"};
+
+bool ends_with(const std::string& s, const std::string& suffix) {
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// The type a topic name suggests: .../odom, .../keyframe_pose, .../path, .../camera_info,
+// .../keyframe; anything else is an image.
+std::string type_of_topic(const std::string& topic) {
+  if (ends_with(topic, "odom")) return "odom";
+  if (ends_with(topic, "pose")) return "pose";
+  if (ends_with(topic, "path")) return "path";
+  if (ends_with(topic, "camera_info")) return "camera_info";
+  if (ends_with(topic, "keyframe")) return "keyframe";
+  return "image";
+}
+
+struct EchoOptions {
+  std::string topic;
+  DdsQos qos;
+  int count = 0;         // 0: until timeout or signal
+  double timeout = 0.0;  // s, 0: none
+};
+
+template <typename Msg>
+int echo(const DdsParticipant& participant, const EchoOptions& o) {
+  const DdsReader<Msg> reader(participant, o.topic, o.qos);
+  const Clock::time_point start = Clock::now();
+  constexpr std::chrono::milliseconds kSlice{100};  // signal polling interval while waiting
+  int received = 0;
+  while (!cli::stop_requested() && (o.count == 0 || received < o.count)) {
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+    if (o.timeout > 0.0 && elapsed >= o.timeout) break;
+    reader.wait(kSlice);
+    reader.take([&](const Msg& m) {
+      if (o.count != 0 && received >= o.count) return;
+      ++received;
+      std::cout << summarize(m) << std::endl;
+    });
+  }
+  if (o.count > 0 && received < o.count && !cli::stop_requested()) {
+    std::cerr << "jpcr_dds_echo: received " << received << " of " << o.count << " samples on "
+              << o.topic << " within " << o.timeout << " s\n";
+    return 1;
+  }
+  return 0;
+}
+
+int run(int argc, char** argv) {
+  cli::Arguments args("jpcr_dds_echo",
+                      "Subscribes to a DDS topic carrying a ROS 2 message and prints one summary\n"
+                      "line per sample. The Cyclone configuration comes from dds.cyclone_uri or\n"
+                      "$CYCLONEDDS_URI.");
+  args.positional("TOPIC", "DDS topic name, e.g. rt/jpcr/odom or rt/camera/depth/image_raw")
+      .option("type",
+              "odom | pose | path | image | camera_info | keyframe (default: from the topic "
+              "name; image otherwise)")
+      .option("count", "exit after N samples (0: run until --timeout or Ctrl-C)", "0")
+      .option("timeout", "seconds to listen (0: no limit); fewer than --count samples is an error",
+              "0")
+      .flag("best-effort", "subscribe best effort (matches sensor-data publishers too)");
+  cli::add_dds_options(args);
+  args.epilog(
+      "Path is read reliable and transient-local (the last path arrives on joining); the other\n"
+      "types reliable and volatile, unless --best-effort.\n\nexample:\n"
+      "  jpcr_dds_echo rt/jpcr/odom --count 5 --timeout 10");
+  return cli::run_program("jpcr_dds_echo", [&] {
+    if (!args.parse(argc, argv)) return 0;
+    EchoOptions o;
+    o.topic = args.get("TOPIC");
+    const std::string type = args.has("type") ? args.get("type") : type_of_topic(o.topic);
+    if (std::find(kTypes.begin(), kTypes.end(), type) == kTypes.end()) {
+      throw cli::UsageError(
+          "--type must be odom, pose, path, image, camera_info or keyframe, got '" + type + "'");
+    }
+    o.count = args.get_int("count");
+    if (o.count < 0) throw cli::UsageError("--count must be >= 0");
+    o.timeout = args.get_double("timeout");
+    if (!(o.timeout >= 0.0)) throw cli::UsageError("--timeout must be >= 0");
+    const DdsConfig dds = cli::dds_config_from(args);
+    o.qos.depth = dds.history_depth;
+    o.qos.reliable = !args.get_flag("best-effort");
+    if (type == "path") o.qos = DdsQos{o.qos.reliable, true, 1};
+    const DdsParticipant participant(dds);
+    cli::install_stop_signal_handler();
+    if (type == "odom") return echo<RosOdometry>(participant, o);
+    if (type == "pose") return echo<RosPoseStamped>(participant, o);
+    if (type == "path") return echo<RosPath>(participant, o);
+    if (type == "camera_info") return echo<RosCameraInfoMsg>(participant, o);
+    if (type == "keyframe") return echo<RosKeyframe>(participant, o);
+    return echo<RosImage>(participant, o);
+  });
+}
+
+}  // namespace
+
+}  // namespace jpcr
+
+int main(int argc, char** argv) {
+  return jpcr::run(argc, argv);
+}

@@ -1,0 +1,94 @@
+// jpcr_eval curvature: RMS principal-curvature error and coverage of estimated maps against the
+// ground truth that jpcr_synth writes (DIR/curvature/<stamp>.npy in both directories).
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <set>
+
+#include "cli/arguments.hpp"
+#include "jpcr/io/atomic_file.hpp"
+#include "jpcr/io/curvature_metrics.hpp"
+#include "jpcr/io/curvature_output.hpp"
+#include "jpcr/io/json_writer.hpp"
+#include "jpcr/quadric/error.hpp"
+#include "jpcr_eval/eval_commands.hpp"
+
+namespace jpcr::eval {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// The stamps of DIR/curvature/*.npy, sorted.
+std::set<std::string> curvature_stamps(const std::string& dir) {
+  const fs::path folder = fs::path(dir) / "curvature";
+  std::error_code ec;
+  if (!fs::is_directory(folder, ec))
+    throw InputError(folder.string() + ": no curvature/ directory (expected <stamp>.npy maps)");
+  std::set<std::string> stamps;
+  for (const fs::directory_entry& e : fs::directory_iterator(folder, ec))
+    if (e.path().extension() == ".npy") stamps.insert(e.path().stem().string());
+  return stamps;
+}
+
+void write_json(std::ostream& out, const CurvatureErrors& e) {
+  JsonWriter json(out);
+  json.begin_object()
+      .field("frames", e.frames)
+      .field("rms_k1", e.rms_k1)
+      .field("rms_k2", e.rms_k2)
+      .field("rms", e.rms)
+      .field("median_abs", e.median_abs)
+      .field("coverage", e.coverage)
+      .field("compared_pixels", e.compared)
+      .field("gt_valid_pixels", e.gt_valid)
+      .end_object();
+  out << '\n';
+}
+
+}  // namespace
+
+int run_curvature(int argc, char** argv) {
+  cli::Arguments args(
+      "jpcr_eval curvature",
+      "Principal-curvature error against ground truth: RMS of k1 and k2 (1/m) over\n"
+      "pixels valid in both, median absolute error, and coverage (the fraction of\n"
+      "ground-truth pixels the estimate covers). Frames are matched by stamp\n"
+      "(GT/curvature/<stamp>.npy and EST/curvature/<stamp>.npy).");
+  args.required("gt", "ground-truth directory (jpcr_synth output)")
+      .required("est", "estimate directory (jpcr_curvature or jpcr_run output)")
+      .option("out", "also write the JSON report to this file")
+      .flag("json", "print JSON instead of text")
+      .epilog("example:\n  jpcr_eval curvature --gt seq --est seq_it --json");
+  return cli::run_program("jpcr_eval curvature", [&] {
+    if (!args.parse(argc, argv)) return 0;
+    const std::set<std::string> gt = curvature_stamps(args.get("gt"));
+    const std::set<std::string> est = curvature_stamps(args.get("est"));
+    CurvatureErrorAccumulator acc;
+    for (const std::string& stamp : est) {
+      if (!gt.count(stamp)) continue;
+      const std::string name = "curvature/" + stamp + ".npy";
+      acc.add(read_curvature_npy((fs::path(args.get("gt")) / name).string()),
+              read_curvature_npy((fs::path(args.get("est")) / name).string()));
+    }
+    const CurvatureErrors e = acc.result();
+    if (e.frames == 0)
+      throw InputError(args.get("est") + ": no curvature map shares a stamp with " +
+                       args.get("gt"));
+    if (args.has("out"))
+      write_file_atomically(args.get("out"), [&](std::ostream& out) { write_json(out, e); });
+    if (args.get_flag("json")) {
+      write_json(std::cout, e);
+    } else {
+      std::printf("frames: %zu compared (%zu estimated, %zu with ground truth)\n", e.frames,
+                  est.size(), gt.size());
+      std::printf("rms k1 %.4f 1/m  rms k2 %.4f 1/m  rms %.4f 1/m  median |err| %.4f 1/m\n",
+                  e.rms_k1, e.rms_k2, e.rms, e.median_abs);
+      std::printf("coverage %.2f %% (%zu of %zu ground-truth pixels)\n", 100.0 * e.coverage,
+                  e.compared, e.gt_valid);
+    }
+    return 0;
+  });
+}
+
+}  // namespace jpcr::eval
