@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
 # The main job on the embedded default: installs what is missing, builds, generates a small
 # ray-traced sequence with exact ground truth (30 frames of room_spheres at 640x480 with 1 %
-# range noise) and evaluates its ground truth. Later steps grow this into the full pipeline run.
+# range noise), estimates curvature with Quad IT and Quad LS and scores both against the exact
+# ground truth. Later steps grow this into the full pipeline run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 tools/setup.sh
 
 build=${JPCR_BUILD_DIR:-build}
 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release > /dev/null
-cmake --build "$build" -j"$(nproc)" --target jpcr_synth jpcr_eval
+cmake --build "$build" -j"$(nproc)" --target jpcr_synth jpcr_eval jpcr_curvature
 
 out=${JPCR_DEMO_OUT:-out/demo}
 mkdir -p "$out"
@@ -19,5 +20,15 @@ echo "== jpcr demo: a synthetic sequence with exact pose and curvature ground tr
 echo "== trajectory metrics of $data (ground truth against itself) =="
 "$build/tools/jpcr_eval" traj --gt "$data/groundtruth.txt" --est "$data/groundtruth.txt" \
   --out "$out/eval.json"
+echo "== curvature of the first 3 frames: Quad IT and Quad LS against the exact ground truth =="
+printf 'quadric:\n  fit:\n    fair_n0_per_range: 0.03\n    gate_per_range: 0.03\n' > "$out/range1.yaml"
+"$build/tools/jpcr_curvature" --dataset "$data" --method it --frames 0:3 --params "$out/range1.yaml" \
+  --out "$out/quad_it"
+"$build/tools/jpcr_curvature" --dataset "$data" --method ls --frames 0:3 --out "$out/quad_ls"
+for m in quad_it quad_ls; do
+  echo "-- $m"
+  "$build/tools/jpcr_eval" curvature --gt "$data" --est "$out/$m"
+done
+echo "curvature maps: $out/quad_it/curvature_png (colour key in the corner), .npy in curvature/"
 echo "sequence: $data (TUM layout; run other tools with --config $data/camera.yaml)"
 echo "report: $out/eval.json"
