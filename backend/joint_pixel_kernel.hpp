@@ -66,7 +66,8 @@ struct RigidMotion {
   }
 };
 
-/// The sums of one quadric's terms in one frame. C and A hold their lower triangles.
+/// The sums of one quadric's terms in one frame (C and A are symmetric; the lower triangle is
+/// what the solvers read).
 template <typename Scalar>
 struct FrameTerms {
   using Matrix6 = Eigen::Matrix<Scalar, 6, 6>;
@@ -108,22 +109,17 @@ JPCR_HD void accumulate_frame_terms(const QuadricT<Scalar>& q, const VertexView&
     out.cost += gated_cost(l.r, d2, limits, inside);
     if (!inside) continue;
     const Scalar w = fair_weight(l.r, d2, limits.n0);
-    for (int i = 0; i < 6; ++i) {
-      const Scalar wJi = w * l.J(i);
-      for (int j = 0; j <= i; ++j)
-        out.C(i, j) += wJi * l.J(j);
-      out.g_gamma(i) += wJi * l.r;
-    }
+    // Rank-1 updates of whole 6x6 blocks (Eigen vectorises them; C and A are read as their
+    // lower triangles).
+    const Eigen::Matrix<Scalar, 6, 1> wJ = w * l.J;
+    out.C.noalias() += wJ * l.J.transpose();
+    out.g_gamma += wJ * l.r;
     if (with_pose) {
       const Eigen::Matrix<Scalar, 6, 1> Jx = quadric_pose_jacobian(q, l, X);
-      for (int i = 0; i < 6; ++i) {
-        const Scalar wJi = w * Jx(i);
-        for (int j = 0; j < 6; ++j)
-          out.B(i, j) += wJi * l.J(j);
-        for (int j = 0; j <= i; ++j)
-          out.A(i, j) += wJi * Jx(j);
-        out.g_xi(i) += wJi * l.r;
-      }
+      const Eigen::Matrix<Scalar, 6, 1> wJx = w * Jx;
+      out.B.noalias() += wJx * l.J.transpose();
+      out.A.noalias() += wJx * Jx.transpose();
+      out.g_xi += wJx * l.r;
     }
     ++out.count;
   }

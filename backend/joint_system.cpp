@@ -34,6 +34,96 @@ struct ReductionShare {
 // number of valid quadrics per row varies.
 constexpr int kRowChunk = 4;
 
+// The per-row loops are compiled twice on x86-64 GCC, for AVX2 + FMA (x86-64-v3) and for the
+// baseline, chosen at load time (function multi-versioning); the kernels inline into each clone.
+// Eigen's type layout is the translation unit's either way, so the clones share one ABI.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
+#define JPCR_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default"), flatten))
+#define JPCR_INLINE_INTO_CLONES __attribute__((always_inline)) inline
+#else
+#define JPCR_SIMD_CLONES
+#define JPCR_INLINE_INTO_CLONES inline
+#endif
+
+// Row v of the reference frame: each active quadric's share of the reduced system.
+template <int MaxFrames>
+JPCR_INLINE_INTO_CLONES void linearize_row(const JointState& state,
+                                           const JointWindowView<double>& window,
+                                           const JointTermParams& p, double lambda, int v,
+                                           int width, JointPixelSystem<double, MaxFrames>& sys,
+                                           ReductionShare& share) {
+  const int M = window.frames;
+  for (int u = 0; u < width; ++u) {
+    const std::size_t i = static_cast<std::size_t>(v) * width + u;
+    if (!state.valid[i]) continue;
+    linearize_joint_pixel(state.quadrics[i], window, u, v, p, lambda, sys);
+    if (!sys.active) continue;
+    add_schur_terms(sys, M, p.estimate_quadrics, share.S.data(), share.s.data(),
+                    share.A_diagonal.data());
+    share.cost += sys.cost;
+    share.terms += sys.count;
+    ++share.active;
+    for (int j = 0; j + 1 < M; ++j)
+      share.seen[j] += sys.seen[j] ? 1 : 0;
+  }
+}
+
+// Row v: back-substitution of each active quadric and its cost at the candidate.
+template <int MaxFrames>
+JPCR_INLINE_INTO_CLONES double step_row(const JointState& state,
+                                        const JointWindowView<double>& window,
+                                        const JointWindowView<double>& next,
+                                        const JointTermParams& p, double lambda,
+                                        const Vector6d* pose_steps, int v, int width,
+                                        JointPixelSystem<double, MaxFrames>& sys, JointStep& out) {
+  double cost = 0.0;
+  for (int u = 0; u < width; ++u) {
+    const std::size_t i = static_cast<std::size_t>(v) * width + u;
+    if (!state.valid[i]) continue;
+    linearize_joint_pixel(state.quadrics[i], window, u, v, p, lambda, sys);
+    if (!sys.active) continue;
+    Quadricd& q = out.candidate.quadrics[i];
+    if (p.estimate_quadrics) {
+      out.quadric_steps[i] = back_substitute(sys, window.frames, pose_steps);
+      apply_quadric_update(q, out.quadric_steps[i]);
+    }
+    cost += joint_pixel_cost(q, next, u, v, p);
+  }
+  return cost;
+}
+
+// The two instantiations the drivers use: J-ftf (M = 2) and a window of up to kMaxWindowFrames.
+JPCR_SIMD_CLONES void linearize_row_pair(const JointState& state,
+                                         const JointWindowView<double>& window,
+                                         const JointTermParams& p, double lambda, int v, int width,
+                                         JointPixelSystem<double, 2>& sys, ReductionShare& share) {
+  linearize_row<2>(state, window, p, lambda, v, width, sys, share);
+}
+JPCR_SIMD_CLONES void linearize_row_window(const JointState& state,
+                                           const JointWindowView<double>& window,
+                                           const JointTermParams& p, double lambda, int v,
+                                           int width,
+                                           JointPixelSystem<double, kMaxWindowFrames>& sys,
+                                           ReductionShare& share) {
+  linearize_row<kMaxWindowFrames>(state, window, p, lambda, v, width, sys, share);
+}
+JPCR_SIMD_CLONES double step_row_pair(const JointState& state,
+                                      const JointWindowView<double>& window,
+                                      const JointWindowView<double>& next, const JointTermParams& p,
+                                      double lambda, const Vector6d* pose_steps, int v, int width,
+                                      JointPixelSystem<double, 2>& sys, JointStep& out) {
+  return step_row<2>(state, window, next, p, lambda, pose_steps, v, width, sys, out);
+}
+JPCR_SIMD_CLONES double step_row_window(const JointState& state,
+                                        const JointWindowView<double>& window,
+                                        const JointWindowView<double>& next,
+                                        const JointTermParams& p, double lambda,
+                                        const Vector6d* pose_steps, int v, int width,
+                                        JointPixelSystem<double, kMaxWindowFrames>& sys,
+                                        JointStep& out) {
+  return step_row<kMaxWindowFrames>(state, window, next, p, lambda, pose_steps, v, width, sys, out);
+}
+
 }  // namespace
 
 JointSystem::JointSystem(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
@@ -60,19 +150,10 @@ ReducedSystem JointSystem::linearize_impl(const JointState& state, double lambda
     JointPixelSystem<double, MaxFrames> sys;
 #pragma omp for schedule(dynamic, kRowChunk) nowait
     for (int v = 0; v < height_; ++v) {
-      for (int u = 0; u < width_; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
-        if (!state.valid[i]) continue;
-        linearize_joint_pixel(state.quadrics[i], window, u, v, params_, lambda, sys);
-        if (!sys.active) continue;
-        add_schur_terms(sys, M, params_.estimate_quadrics, share.S.data(), share.s.data(),
-                        share.A_diagonal.data());
-        share.cost += sys.cost;
-        share.terms += sys.count;
-        ++share.active;
-        for (int j = 0; j + 1 < M; ++j)
-          share.seen[j] += sys.seen[j] ? 1 : 0;
-      }
+      if constexpr (MaxFrames == 2)
+        linearize_row_pair(state, window, params_, lambda, v, width_, sys, share);
+      else
+        linearize_row_window(state, window, params_, lambda, v, width_, sys, share);
     }
 #pragma omp critical(jpcr_joint_reduce)
     {
@@ -128,18 +209,12 @@ JointStep JointSystem::step_impl(const JointState& state, double lambda,
     JointPixelSystem<double, MaxFrames> sys;
 #pragma omp for schedule(dynamic, kRowChunk) nowait
     for (int v = 0; v < height_; ++v) {
-      for (int u = 0; u < width_; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
-        if (!state.valid[i]) continue;
-        linearize_joint_pixel(state.quadrics[i], window, u, v, params_, lambda, sys);
-        if (!sys.active) continue;
-        Quadricd& q = out.candidate.quadrics[i];
-        if (params_.estimate_quadrics) {
-          out.quadric_steps[i] = back_substitute(sys, M, pose_steps.data());
-          apply_quadric_update(q, out.quadric_steps[i]);
-        }
-        cost += joint_pixel_cost(q, next, u, v, params_);
-      }
+      if constexpr (MaxFrames == 2)
+        cost += step_row_pair(state, window, next, params_, lambda, pose_steps.data(), v, width_,
+                              sys, out);
+      else
+        cost += step_row_window(state, window, next, params_, lambda, pose_steps.data(), v, width_,
+                                sys, out);
     }
   }
   out.cost = cost;

@@ -134,10 +134,6 @@ RefinementResult refine_window(const std::vector<VertexMap>& vertices,
     if (solved) {
       JointStep step = system.step(state, lambda, pose_steps);
       const bool small = below_tolerance(pose_steps, params);
-      if (getenv("JPCR_DEBUG"))
-        fprintf(stderr, "lambda %.1e step %.3e m %.3e rad cost %.6g -> %.6g active %d\n", lambda,
-                pose_steps[0].head<3>().norm(), pose_steps[0].tail<3>().norm(), lin.cost, step.cost,
-                lin.active);
       if (std::isfinite(step.cost) && step.cost <= lin.cost) {  // accept
         state = std::move(step.candidate);
         ++report.iterations;
