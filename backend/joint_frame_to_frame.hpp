@@ -1,7 +1,9 @@
 // J-ftf (method.md §6): joint refinement of one pose T = T₂ (frame 2 → frame 1) and the dense
 // quadrics of frame 1. Mathematically J-full with M = 2; it runs the same loop (refine_window)
-// with the per-pixel kernel instantiated for two frames (JointPixelSystem<·, 2>), the form the
-// CUDA J-ftf runs.
+// with the per-pixel kernel instantiated for two frames (JointPixelSystem<·, 2>, the form the
+// CUDA J-ftf runs), and keeps each quadric's back-substitution factors (42 numbers) from the
+// linearisation instead of recomputing its system (measured: 0.86 s instead of 1.39 s of CPU per
+// iteration at 320x240).
 #pragma once
 
 #include "jpcr/backend/refiner.hpp"

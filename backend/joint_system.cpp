@@ -25,6 +25,7 @@ struct ReductionShare {
       : S(static_cast<std::size_t>(n) * n, 0.0), s(n, 0.0), A_diagonal(n, 0.0), seen(poses, 0) {}
   std::vector<double> S, s, A_diagonal;
   std::vector<int> seen;
+  std::vector<PairFactors> factors;
   double cost = 0.0;
   long terms = 0;
   int active = 0;
@@ -35,23 +36,22 @@ struct ReductionShare {
 constexpr int kRowChunk = 4;
 
 // The per-row loops are compiled twice on x86-64 GCC, for AVX2 + FMA (x86-64-v3) and for the
-// baseline, chosen at load time (function multi-versioning); the kernels inline into each clone.
-// Eigen's type layout is the translation unit's either way, so the clones share one ABI.
+// baseline, chosen at load time (function multi-versioning); `flatten` inlines the kernels into
+// each clone. Eigen's type layout is the translation unit's either way, so the clones share one
+// ABI (a whole translation unit built with -mavx2 would not).
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
 #define JPCR_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default"), flatten))
-#define JPCR_INLINE_INTO_CLONES __attribute__((always_inline)) inline
 #else
 #define JPCR_SIMD_CLONES
-#define JPCR_INLINE_INTO_CLONES inline
 #endif
 
-// Row v of the reference frame: each active quadric's share of the reduced system.
+// Row v of the reference frame: each active quadric's share of the reduced system; with
+// keep_factors (M = 2) also its back-substitution factors.
 template <int MaxFrames>
-JPCR_INLINE_INTO_CLONES void linearize_row(const JointState& state,
-                                           const JointWindowView<double>& window,
-                                           const JointTermParams& p, double lambda, int v,
-                                           int width, JointPixelSystem<double, MaxFrames>& sys,
-                                           ReductionShare& share) {
+void linearize_row(const JointState& state, const JointWindowView<double>& window,
+                   const JointTermParams& p, double lambda, int v, int width, bool keep_factors,
+                   ReductionShare& share) {
+  JointPixelSystem<double, MaxFrames> sys;
   const int M = window.frames;
   for (int u = 0; u < width; ++u) {
     const std::size_t i = static_cast<std::size_t>(v) * width + u;
@@ -65,17 +65,17 @@ JPCR_INLINE_INTO_CLONES void linearize_row(const JointState& state,
     ++share.active;
     for (int j = 0; j + 1 < M; ++j)
       share.seen[j] += sys.seen[j] ? 1 : 0;
+    if (keep_factors) share.factors.push_back(PairFactors{i, sys.k, sys.K[0]});
   }
 }
 
-// Row v: back-substitution of each active quadric and its cost at the candidate.
+// Row v, recomputing each active quadric's system: its back-substitution and its cost at the
+// candidate (windows of M > 2, and Q-full).
 template <int MaxFrames>
-JPCR_INLINE_INTO_CLONES double step_row(const JointState& state,
-                                        const JointWindowView<double>& window,
-                                        const JointWindowView<double>& next,
-                                        const JointTermParams& p, double lambda,
-                                        const Vector6d* pose_steps, int v, int width,
-                                        JointPixelSystem<double, MaxFrames>& sys, JointStep& out) {
+double step_row(const JointState& state, const JointWindowView<double>& window,
+                const JointWindowView<double>& next, const JointTermParams& p, double lambda,
+                const Vector6d* pose_steps, int v, int width, JointStep& out) {
+  JointPixelSystem<double, MaxFrames> sys;
   double cost = 0.0;
   for (int u = 0; u < width; ++u) {
     const std::size_t i = static_cast<std::size_t>(v) * width + u;
@@ -92,36 +92,43 @@ JPCR_INLINE_INTO_CLONES double step_row(const JointState& state,
   return cost;
 }
 
-// The two instantiations the drivers use: J-ftf (M = 2) and a window of up to kMaxWindowFrames.
+// J-ftf's step from the kept factors: Δγ_p = k − K Δξ, then the candidate's cost.
+double step_factors(const PairFactors& f, const JointWindowView<double>& next,
+                    const JointTermParams& p, const Vector6d& pose_step, int width,
+                    JointStep& out) {
+  Quadricd& q = out.candidate.quadrics[f.pixel];
+  out.quadric_steps[f.pixel] = f.k - f.K * pose_step;
+  apply_quadric_update(q, out.quadric_steps[f.pixel]);
+  const int u = static_cast<int>(f.pixel % width), v = static_cast<int>(f.pixel / width);
+  return joint_pixel_cost(q, next, u, v, p);
+}
+
+// The instantiations the drivers run: J-ftf (M = 2) and a window of up to kMaxWindowFrames.
 JPCR_SIMD_CLONES void linearize_row_pair(const JointState& state,
                                          const JointWindowView<double>& window,
                                          const JointTermParams& p, double lambda, int v, int width,
-                                         JointPixelSystem<double, 2>& sys, ReductionShare& share) {
-  linearize_row<2>(state, window, p, lambda, v, width, sys, share);
+                                         ReductionShare& share) {
+  linearize_row<2>(state, window, p, lambda, v, width, p.estimate_quadrics, share);
 }
 JPCR_SIMD_CLONES void linearize_row_window(const JointState& state,
                                            const JointWindowView<double>& window,
                                            const JointTermParams& p, double lambda, int v,
-                                           int width,
-                                           JointPixelSystem<double, kMaxWindowFrames>& sys,
-                                           ReductionShare& share) {
-  linearize_row<kMaxWindowFrames>(state, window, p, lambda, v, width, sys, share);
-}
-JPCR_SIMD_CLONES double step_row_pair(const JointState& state,
-                                      const JointWindowView<double>& window,
-                                      const JointWindowView<double>& next, const JointTermParams& p,
-                                      double lambda, const Vector6d* pose_steps, int v, int width,
-                                      JointPixelSystem<double, 2>& sys, JointStep& out) {
-  return step_row<2>(state, window, next, p, lambda, pose_steps, v, width, sys, out);
+                                           int width, ReductionShare& share) {
+  linearize_row<kMaxWindowFrames>(state, window, p, lambda, v, width, false, share);
 }
 JPCR_SIMD_CLONES double step_row_window(const JointState& state,
                                         const JointWindowView<double>& window,
                                         const JointWindowView<double>& next,
                                         const JointTermParams& p, double lambda,
                                         const Vector6d* pose_steps, int v, int width,
-                                        JointPixelSystem<double, kMaxWindowFrames>& sys,
                                         JointStep& out) {
-  return step_row<kMaxWindowFrames>(state, window, next, p, lambda, pose_steps, v, width, sys, out);
+  return step_row<kMaxWindowFrames>(state, window, next, p, lambda, pose_steps, v, width, out);
+}
+JPCR_SIMD_CLONES double step_factors_clone(const PairFactors& f,
+                                           const JointWindowView<double>& next,
+                                           const JointTermParams& p, const Vector6d& pose_step,
+                                           int width, JointStep& out) {
+  return step_factors(f, next, p, pose_step, width, out);
 }
 
 }  // namespace
@@ -136,8 +143,7 @@ JointSystem::JointSystem(const std::vector<VertexMap>& frames, const CameraIntri
   height_ = frames.empty() ? 0 : frames[0].height();
 }
 
-template <int MaxFrames>
-ReducedSystem JointSystem::linearize_impl(const JointState& state, double lambda) const {
+ReducedSystem JointSystem::linearize(const JointState& state, double lambda) const {
   const int M = frames(), n = 6 * (M - 1);
   const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
   const JointWindowView<double> window{
@@ -147,13 +153,12 @@ ReducedSystem JointSystem::linearize_impl(const JointState& state, double lambda
 #pragma omp parallel
   {
     ReductionShare share(n, M - 1);
-    JointPixelSystem<double, MaxFrames> sys;
 #pragma omp for schedule(dynamic, kRowChunk) nowait
     for (int v = 0; v < height_; ++v) {
-      if constexpr (MaxFrames == 2)
-        linearize_row_pair(state, window, params_, lambda, v, width_, sys, share);
+      if (M == 2)
+        linearize_row_pair(state, window, params_, lambda, v, width_, share);
       else
-        linearize_row_window(state, window, params_, lambda, v, width_, sys, share);
+        linearize_row_window(state, window, params_, lambda, v, width_, share);
     }
 #pragma omp critical(jpcr_joint_reduce)
     {
@@ -168,6 +173,7 @@ ReducedSystem JointSystem::linearize_impl(const JointState& state, double lambda
       total.cost += share.cost;
       total.terms += share.terms;
       total.active += share.active;
+      total.factors.insert(total.factors.end(), share.factors.begin(), share.factors.end());
     }
   }
   ReducedSystem out;
@@ -179,57 +185,67 @@ ReducedSystem JointSystem::linearize_impl(const JointState& state, double lambda
   out.cost = total.cost;
   out.terms = total.terms;
   out.active = total.active;
-  out.seen = total.seen;
+  out.seen = std::move(total.seen);
+  out.factors = std::move(total.factors);
   return out;
 }
 
-template <int MaxFrames>
-JointStep JointSystem::step_impl(const JointState& state, double lambda,
-                                 const std::vector<Vector6d>& pose_steps) const {
-  const int M = frames();
+JointStep JointSystem::start_step(const JointState& state,
+                                  const std::vector<Vector6d>& pose_steps) const {
   JointStep out;
   out.pose_steps = pose_steps;
   out.candidate = state;
-  for (int j = 1; j < M; ++j) {
+  for (int j = 1; j < frames(); ++j) {
     Eigen::Isometry3d T = se3_exp(pose_steps[j - 1]) * state.poses[j];  // T ← exp(Δξ^) T
     T.linear() = orthonormalize(T.linear());
     out.candidate.poses[j] = T;
   }
   out.quadric_steps.assign(state.quadrics.size(), QuadricVector<double>::Zero());
+  return out;
+}
+
+JointStep JointSystem::step_pair(const JointState& state, const ReducedSystem& system,
+                                 const std::vector<Vector6d>& pose_steps) const {
+  JointStep out = start_step(state, pose_steps);
+  const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
+  const JointWindowView<double> next{views_.data(),   moved.data(),
+                                     frames(),        camera_,
+                                     pattern_.data(), static_cast<int>(pattern_.size())};
+  const long count = static_cast<long>(system.factors.size());
+  double cost = 0.0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : cost)
+  for (long k = 0; k < count; ++k)
+    cost += step_factors_clone(system.factors[static_cast<std::size_t>(k)], next, params_,
+                               pose_steps[0], width_, out);
+  out.cost = cost;
+  return out;
+}
+
+JointStep JointSystem::step_window(const JointState& state, double lambda,
+                                   const std::vector<Vector6d>& pose_steps) const {
+  JointStep out = start_step(state, pose_steps);
   const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
   const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
-  const int pattern_size = static_cast<int>(pattern_.size());
+  const int M = frames(), pattern_size = static_cast<int>(pattern_.size());
   const JointWindowView<double> window{views_.data(), motions.data(),  M,
                                        camera_,       pattern_.data(), pattern_size};
   const JointWindowView<double> next{views_.data(), moved.data(),    M,
                                      camera_,       pattern_.data(), pattern_size};
   double cost = 0.0;
-#pragma omp parallel reduction(+ : cost)
-  {
-    JointPixelSystem<double, MaxFrames> sys;
-#pragma omp for schedule(dynamic, kRowChunk) nowait
-    for (int v = 0; v < height_; ++v) {
-      if constexpr (MaxFrames == 2)
-        cost += step_row_pair(state, window, next, params_, lambda, pose_steps.data(), v, width_,
-                              sys, out);
-      else
-        cost += step_row_window(state, window, next, params_, lambda, pose_steps.data(), v, width_,
-                                sys, out);
-    }
-  }
+#pragma omp parallel for schedule(dynamic, kRowChunk) reduction(+ : cost)
+  for (int v = 0; v < height_; ++v)
+    cost +=
+        step_row_window(state, window, next, params_, lambda, pose_steps.data(), v, width_, out);
   out.cost = cost;
   return out;
 }
 
-ReducedSystem JointSystem::linearize(const JointState& state, double lambda) const {
-  return frames() == 2 ? linearize_impl<2>(state, lambda)
-                       : linearize_impl<kMaxWindowFrames>(state, lambda);
-}
-
-JointStep JointSystem::step(const JointState& state, double lambda,
+JointStep JointSystem::step(const JointState& state, const ReducedSystem& system, double lambda,
                             const std::vector<Vector6d>& pose_steps) const {
-  return frames() == 2 ? step_impl<2>(state, lambda, pose_steps)
-                       : step_impl<kMaxWindowFrames>(state, lambda, pose_steps);
+  // J-ftf keeps its factors; Q-full has no quadric step and M = 2 Q-full keeps none, so it
+  // recomputes (cheaply: no C_p) like the windows.
+  if (frames() == 2 && params_.estimate_quadrics) return step_pair(state, system, pose_steps);
+  return step_window(state, lambda, pose_steps);
 }
 
 bool JointSystem::solve_poses(const ReducedSystem& system, double lambda,

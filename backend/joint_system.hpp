@@ -24,16 +24,26 @@ struct JointState {
   std::vector<unsigned char> valid;  // 1 where the pixel has a quadric
 };
 
+/// What the back-substitution of J-ftf needs of one active quadric, kept from its linearisation:
+/// Δγ_p = k − K Δξ (42 numbers). Only for M = 2; larger windows would keep (M − 1)·36 + 6 numbers
+/// per quadric (over 1 kB at M = 5) and recompute the system instead.
+struct PairFactors {
+  std::size_t pixel = 0;    // row-major index in the reference frame
+  QuadricVector<double> k;  // C_p⁻¹ b_p
+  Matrix6d K;               // C_p⁻¹ B_pᵀ
+};
+
 /// S = A − Σ_p B_p C_p⁻¹ B_pᵀ and s = a − Σ_p B_p C_p⁻¹ b_p (n = 6 (M − 1)), with the damping λ
 /// already in C_p but not in A (solve_poses adds λ diag A).
 struct ReducedSystem {
   Eigen::MatrixXd S;
   Eigen::VectorXd s;
   Eigen::VectorXd A_diagonal;
-  double cost = 0.0;      // Σ w r² over the active quadrics
-  long terms = 0;         // their terms inside the gate
-  int active = 0;         // quadrics taking part
-  std::vector<int> seen;  // per pose T_2 … T_M: active quadrics that frame sees
+  double cost = 0.0;                 // Σ w r² over the active quadrics
+  long terms = 0;                    // their terms inside the gate
+  int active = 0;                    // quadrics taking part
+  std::vector<int> seen;             // per pose T_2 … T_M: active quadrics that frame sees
+  std::vector<PairFactors> factors;  // M = 2: every active quadric's back-substitution factors
 };
 
 /// A proposed step and where it leads.
@@ -61,17 +71,20 @@ class JointSystem {
   static bool solve_poses(const ReducedSystem& system, double lambda,
                           std::vector<Vector6d>& pose_steps);
 
-  /// Back-substitutes Δγ_p for the poses' step (same state and λ as linearize) and evaluates
-  /// the cost of the candidate, re-associated at the new poses.
-  JointStep step(const JointState& state, double lambda,
+  /// Back-substitutes Δγ_p for the poses' step and evaluates the cost of the candidate,
+  /// re-associated at the new poses. `system` and λ are those of linearize(state, λ): J-ftf
+  /// uses the factors kept in `system`, larger windows recompute each quadric's system.
+  JointStep step(const JointState& state, const ReducedSystem& system, double lambda,
                  const std::vector<Vector6d>& pose_steps) const;
 
  private:
   template <int MaxFrames>
   ReducedSystem linearize_impl(const JointState& state, double lambda) const;
-  template <int MaxFrames>
-  JointStep step_impl(const JointState& state, double lambda,
+  JointStep step_pair(const JointState& state, const ReducedSystem& system,
                       const std::vector<Vector6d>& pose_steps) const;
+  JointStep step_window(const JointState& state, double lambda,
+                        const std::vector<Vector6d>& pose_steps) const;
+  JointStep start_step(const JointState& state, const std::vector<Vector6d>& pose_steps) const;
 
   std::vector<VertexView> views_;
   PinholeProjection camera_;

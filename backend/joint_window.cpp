@@ -132,7 +132,7 @@ RefinementResult refine_window(const std::vector<VertexMap>& vertices,
     std::vector<Vector6d> pose_steps;
     const bool solved = JointSystem::solve_poses(lin, lambda, pose_steps);
     if (solved) {
-      JointStep step = system.step(state, lambda, pose_steps);
+      JointStep step = system.step(state, lin, lambda, pose_steps);
       const bool small = below_tolerance(pose_steps, params);
       if (std::isfinite(step.cost) && step.cost <= lin.cost) {  // accept
         state = std::move(step.candidate);

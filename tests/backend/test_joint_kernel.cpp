@@ -222,7 +222,7 @@ TEST_P(SchurStep, EqualsTheDenseSolveOfTheFullSystem) {
   ASSERT_GT(lin.active, 20);
   std::vector<Vector6d> pose_steps;
   ASSERT_TRUE(JointSystem::solve_poses(lin, lambda, pose_steps));
-  const JointStep step = system.step(state, lambda, pose_steps);
+  const JointStep step = system.step(state, lin, lambda, pose_steps);
   const DenseStep dense = dense_step(w, state, p, pattern, lambda);
 
   Eigen::VectorXd schur_poses(6 * (M - 1));

@@ -57,7 +57,7 @@ void run(benchmark::State& state, bool estimate_quadrics) {
       state.SkipWithError("the reduced system is singular");
       break;
     }
-    const jpcr::JointStep step = system.step(w.state, params.initial_damping, steps);
+    const jpcr::JointStep step = system.step(w.state, lin, params.initial_damping, steps);
     benchmark::DoNotOptimize(step.cost);
     active = lin.active;
   }
