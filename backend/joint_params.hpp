@@ -1,0 +1,46 @@
+// Tunables of the joint refiners J-ftf, J-full and Q-full (method.md §6–§8). A flat struct with
+// in-class defaults and units; YAML maps onto it in io/ only.
+#pragma once
+
+#include "jpcr/backend/joint_pixel_kernel.hpp"
+#include "jpcr/quadric/quadric_params.hpp"
+
+namespace jpcr {
+
+/// The largest window J-full accepts (M, the reference frame included).
+inline constexpr int kMaxWindowFrames = 16;
+
+struct JointParams {
+  // The pattern, the initial normals and Quad IT (the initial quadrics); quadric.fit's weight n₀,
+  // gate and min_samples also apply to every joint term.
+  QuadricParams quadric;
+
+  int max_iterations = 20;              // accepted Levenberg-Marquardt steps at most
+  double translation_tolerance = 1e-5;  // m: converged when every pose step moves less ...
+  double rotation_tolerance = 1e-5;     // rad: ... and turns less than this
+  float occlusion_threshold = 0.03f;    // m: association rejected when image j's depth at the
+  float occlusion_fraction = 0.02f;     //    projected centre differs from c_z by more than
+                                        //    threshold + fraction · c_z (fraction of depth)
+  int min_frame_terms = 10;             // terms a frame j needs for its association to count
+  double min_pivot_ratio = 1e-8;        // C_p ill-conditioned below it (joint_pixel_kernel.hpp)
+  double initial_damping = 1e-4;        // λ: relative Levenberg damping of diag A and diag C_p
+  double damping_factor = 10.0;  // λ ← λ·f after a rejected step, λ/f after an accepted one
+  double max_damping = 1e6;      // λ above it: the cost cannot be lowered → diverged
+  int min_active_quadrics = 50;  // fewer quadrics seen in another frame: too_few_quadrics
+
+  /// The per-pixel part, as the kernels receive it.
+  JointTermParams terms(bool estimate_quadrics) const {
+    JointTermParams t;
+    t.fit = quadric.fit;
+    t.occlusion_threshold = occlusion_threshold;
+    t.occlusion_fraction = occlusion_fraction;
+    t.min_frame_terms = min_frame_terms;
+    t.min_pivot_ratio = min_pivot_ratio;
+    t.estimate_quadrics = estimate_quadrics;
+    return t;
+  }
+
+  void validate() const;  // throws InputError "field: problem"
+};
+
+}  // namespace jpcr

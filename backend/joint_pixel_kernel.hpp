@@ -1,0 +1,339 @@
+// The per-pixel work of J-ftf, J-full and Q-full (method.md §6–§8), written once for the CPU
+// and the GPU: every function is JPCR_HD, allocation-free and fixed-size, so the CPU drivers
+// (joint_system.cpp) and a CUDA kernel run exactly this code per quadric.
+//
+// A quadric γ_p lives at pixel p of the reference frame 1. A sample Q of frame j (its camera
+// frame) is mapped into frame 1 as X = T_j Q and gives the residual r(X; γ_p) of
+// quadric_model.hpp, with
+//
+//     ∂r/∂γ = J_γ (Quad IT's Jacobian, evaluated at X),
+//     ∂r/∂ξ_j = J_ξ = [g_wᵀ, (X × g_w)ᵀ], g_w = Rᵀ g (left update T_j ← exp(ξ^) T_j).
+//
+// Per quadric the normal equations of the joint system (method.md §6) are
+//
+//     C_p = Σ w J_γ J_γᵀ (all frames),  b_p = −Σ w J_γ r,
+//     B_jp = Σ w J_ξ J_γᵀ (frame j),    A_jp = Σ w J_ξ J_ξᵀ,  a_jp = −Σ w J_ξ r,
+//
+// and eliminating γ_p (Schur complement, method.md §6/§7; the paper's block inverse is wrong,
+// method.md §10, its final formulas are right) gives the quadric's share of the reduced system
+//
+//     S_jk −= B_jp C_p⁻¹ B_kpᵀ (+ A_jp on the diagonal),  s_j += a_jp − B_jp C_p⁻¹ b_p,
+//
+// and, once the poses are solved, the back-substitution Δγ_p = C_p⁻¹ (b_p − Σ_j B_jpᵀ Δξ_j).
+// The weight w = n₀² / (n₀² + r² + d²) is held fixed in each linearisation (IRLS). The cost is
+// Σ w r²; a sample outside the gate |r| ≤ g is dropped from the normal equations and costs the
+// constant w(g) g², so the cost stays continuous when a sample crosses the gate.
+#pragma once
+
+#include <cmath>
+
+#include <Eigen/Core>
+
+#include "jpcr/quadric/dense_cholesky.hpp"
+#include "jpcr/quadric/neighbourhood_pattern.hpp"
+#include "jpcr/quadric/quadric_fit_kernel.hpp"
+#include "jpcr/quadric/quadric_model.hpp"
+
+namespace jpcr {
+
+/// The tunables the per-pixel work reads, by value (a CUDA kernel receives it as is).
+struct JointTermParams {
+  QuadricFitParams fit;  // weight n₀ and gate (both frames), min_samples for the frame-1 terms
+  float occlusion_threshold = 0.03f;  // m: image j's depth at the projected centre may differ
+  float occlusion_fraction = 0.02f;   //    from c_z by threshold + fraction · c_z (occlusion)
+  int min_frame_terms = 10;           // a frame j sees the quadric only with this many terms
+  double min_pivot_ratio = 1e-8;      // C_p is ill-conditioned when a Cholesky pivot² falls below
+                                      // this fraction of its diagonal entry (scale-invariant)
+  bool estimate_quadrics = true;      // false: Q-full (quadrics fixed, no C_p, no frame-1 terms)
+};
+
+/// The pinhole projection of method.md §1 (pixels).
+struct PinholeProjection {
+  double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
+};
+
+/// T_j = (R, t): frame j → frame 1.
+template <typename Scalar>
+struct RigidMotion {
+  Eigen::Matrix<Scalar, 3, 3> R = Eigen::Matrix<Scalar, 3, 3>::Identity();
+  Eigen::Matrix<Scalar, 3, 1> t = Eigen::Matrix<Scalar, 3, 1>::Zero();
+
+  JPCR_HD Eigen::Matrix<Scalar, 3, 1> apply(const Eigen::Matrix<Scalar, 3, 1>& Q) const {
+    return R * Q + t;
+  }
+  JPCR_HD Eigen::Matrix<Scalar, 3, 1> apply_inverse(const Eigen::Matrix<Scalar, 3, 1>& X) const {
+    return R.transpose() * (X - t);
+  }
+};
+
+/// The sums of one quadric's terms in one frame (C and A are symmetric; the lower triangle is
+/// what the solvers read).
+template <typename Scalar>
+struct FrameTerms {
+  using Matrix6 = Eigen::Matrix<Scalar, 6, 6>;
+  using Vector6 = Eigen::Matrix<Scalar, 6, 1>;
+  Matrix6 C = Matrix6::Zero();        // Σ w J_γ J_γᵀ
+  Vector6 g_gamma = Vector6::Zero();  // Σ w J_γ r  (= −b)
+  Matrix6 B = Matrix6::Zero();        // Σ w J_ξ J_γᵀ (rows ξ, columns γ)
+  Matrix6 A = Matrix6::Zero();        // Σ w J_ξ J_ξᵀ
+  Vector6 g_xi = Vector6::Zero();     // Σ w J_ξ r  (= −a)
+  Scalar cost = 0;                    // Σ w r², gated samples at w(g) g²
+  int count = 0;                      // samples inside the gate
+};
+
+/// w and the cost share of one sample at distance² d2 from p̄ (the gate of the file comment).
+template <typename Scalar>
+JPCR_HD Scalar gated_cost(Scalar r, Scalar d2, const SampleGate<Scalar>& limits, bool& inside) {
+  inside = r <= limits.gate && r >= -limits.gate;
+  const Scalar e = inside ? r : limits.gate;
+  return fair_weight(e, d2, limits.n0) * e * e;
+}
+
+/// Adds the samples of `pattern` around (u, v) of `view`, mapped by T into frame 1, to the
+/// quadric's normal equations; with_pose also builds the pose blocks B, A and g_xi.
+template <typename Scalar>
+JPCR_HD void accumulate_frame_terms(const QuadricT<Scalar>& q, const VertexView& view,
+                                    const RigidMotion<Scalar>& T, bool with_pose,
+                                    const PixelOffset* pattern, int pattern_size, int u, int v,
+                                    const SampleGate<Scalar>& limits, FrameTerms<Scalar>& out) {
+  using Vector3 = Eigen::Matrix<Scalar, 3, 1>;
+  for (int k = 0; k < pattern_size; ++k) {
+    const int su = u + pattern[k].du, sv = v + pattern[k].dv;
+    if (!view.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
+    const Eigen::Vector3f& Qf = view(su, sv);
+    if (!is_finite_value(Qf.z())) continue;
+    const Vector3 X = T.apply(Qf.template cast<Scalar>());
+    const QuadricLinearization<Scalar> l = linearize_quadric(q, X);
+    const Scalar d2 = (X - q.center).squaredNorm();
+    bool inside = false;
+    out.cost += gated_cost(l.r, d2, limits, inside);
+    if (!inside) continue;
+    const Scalar w = fair_weight(l.r, d2, limits.n0);
+    // Rank-1 updates of whole 6x6 blocks (Eigen vectorises them; C and A are read as their
+    // lower triangles).
+    const Eigen::Matrix<Scalar, 6, 1> wJ = w * l.J;
+    out.C.noalias() += wJ * l.J.transpose();
+    out.g_gamma += wJ * l.r;
+    if (with_pose) {
+      const Eigen::Matrix<Scalar, 6, 1> Jx = quadric_pose_jacobian(q, l, X);
+      const Eigen::Matrix<Scalar, 6, 1> wJx = w * Jx;
+      out.B.noalias() += wJx * l.J.transpose();
+      out.A.noalias() += wJx * Jx.transpose();
+      out.g_xi += wJx * l.r;
+    }
+    ++out.count;
+  }
+}
+
+/// The cost Σ w r² (and the gated count) of one frame's samples, without Jacobians.
+template <typename Scalar>
+JPCR_HD Scalar frame_cost(const QuadricT<Scalar>& q, const VertexView& view,
+                          const RigidMotion<Scalar>& T, const PixelOffset* pattern,
+                          int pattern_size, int u, int v, const SampleGate<Scalar>& limits,
+                          int& count) {
+  Scalar cost = 0;
+  count = 0;
+  for (int k = 0; k < pattern_size; ++k) {
+    const int su = u + pattern[k].du, sv = v + pattern[k].dv;
+    if (!view.in_bounds(su, sv)) continue;
+    const Eigen::Vector3f& Qf = view(su, sv);
+    if (!is_finite_value(Qf.z())) continue;
+    const Eigen::Matrix<Scalar, 3, 1> X = T.apply(Qf.template cast<Scalar>());
+    bool inside = false;
+    cost += gated_cost(quadric_residual(q, X), (X - q.center).squaredNorm(), limits, inside);
+    count += inside ? 1 : 0;
+  }
+  return cost;
+}
+
+/// Projective association (method.md §6): c = T⁻¹ p̄ projected into image j. False when c is
+/// behind the camera, projects outside the image, or image j's depth there differs from c_z by
+/// more than the occlusion threshold.
+template <typename Scalar>
+JPCR_HD bool associate(const Eigen::Matrix<Scalar, 3, 1>& centre, const RigidMotion<Scalar>& T,
+                       const VertexView& view, const PinholeProjection& cam,
+                       const JointTermParams& p, int& u, int& v) {
+  const Eigen::Matrix<Scalar, 3, 1> c = T.apply_inverse(centre);
+  if (!(c.z() > Scalar(0))) return false;
+  const Scalar fu = Scalar(cam.fx) * c.x() / c.z() + Scalar(cam.cx);
+  const Scalar fv = Scalar(cam.fy) * c.y() / c.z() + Scalar(cam.cy);
+  if (!(fu > Scalar(-0.5) && fv > Scalar(-0.5) && fu < Scalar(view.width) - Scalar(0.5) &&
+        fv < Scalar(view.height) - Scalar(0.5)))
+    return false;
+  u = static_cast<int>(std::floor(fu + Scalar(0.5)));
+  v = static_cast<int>(std::floor(fv + Scalar(0.5)));
+  if (!view.in_bounds(u, v)) return false;
+  const float z = view(u, v).z();
+  if (!is_finite_value(z)) return false;
+  const Scalar limit = Scalar(p.occlusion_threshold) + Scalar(p.occlusion_fraction) * c.z();
+  const Scalar dz = Scalar(z) - c.z();
+  return dz <= limit && dz >= -limit;
+}
+
+/// The inputs of one window that every pixel reads: frame j's vertex view and T_j (j = 0 is the
+/// reference frame, T_0 = I), the camera and the sampling pattern.
+template <typename Scalar>
+struct JointWindowView {
+  const VertexView* views = nullptr;
+  const RigidMotion<Scalar>* motions = nullptr;
+  int frames = 0;  // M
+  PinholeProjection camera;
+  const PixelOffset* pattern = nullptr;
+  int pattern_size = 0;
+};
+
+/// One quadric's linearised system over a window of at most MaxFrames frames, and its Schur
+/// factors K_j = C_p⁻¹ B_jpᵀ and k = C_p⁻¹ b_p. J-ftf is MaxFrames = 2.
+template <typename Scalar, int MaxFrames>
+struct JointPixelSystem {
+  using Matrix6 = Eigen::Matrix<Scalar, 6, 6>;
+  using Vector6 = Eigen::Matrix<Scalar, 6, 1>;
+  static constexpr int kPoses = MaxFrames - 1;  // T_2 … T_M
+
+  Matrix6 L;             // Cholesky factor of the damped C_p (lower)
+  Vector6 C_diagonal;    // diag C_p, undamped (the LM damping of the full system)
+  Vector6 k;             // C_p⁻¹ b_p
+  Matrix6 B[kPoses];     // B_jp
+  Matrix6 K[kPoses];     // C_p⁻¹ B_jpᵀ
+  Matrix6 A[kPoses];     // A_jp, lower triangle
+  Vector6 g_xi[kPoses];  // −a_jp
+  Vector6 g_gamma;       // −b_p
+  bool seen[kPoses];     // frame j+2 sees the quadric
+  Scalar cost = 0;       // Σ w r² over all its terms
+  int count = 0;         // terms inside the gate
+  bool active = false;   // takes part in this iteration
+};
+
+/// Builds the system of the quadric at reference pixel (u, v) (method.md §6/§7) with the
+/// Levenberg damping λ on the diagonal of C_p. Inactive when the frame-1 terms are too few, no
+/// other frame sees it, or C_p is ill-conditioned; an inactive quadric keeps its γ_p.
+template <typename Scalar, int MaxFrames>
+JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& w,
+                                   int u, int v, const JointTermParams& p, Scalar lambda,
+                                   JointPixelSystem<Scalar, MaxFrames>& sys) {
+  using Matrix6 = Eigen::Matrix<Scalar, 6, 6>;
+  const SampleGate<Scalar> limits = SampleGate<Scalar>::at(p.fit, q.center);
+  sys.active = false;
+  sys.cost = 0;
+  sys.count = 0;
+  for (int j = 0; j < sys.kPoses; ++j)
+    sys.seen[j] = false;
+  Matrix6 C = Matrix6::Zero();
+  sys.g_gamma.setZero();
+  if (p.estimate_quadrics) {  // frame-1 terms: as Quad IT, T = I, no pose
+    FrameTerms<Scalar> f1;
+    accumulate_frame_terms(q, w.views[0], RigidMotion<Scalar>{}, false, w.pattern, w.pattern_size,
+                           u, v, limits, f1);
+    if (f1.count < p.fit.min_samples) return;
+    C = f1.C;
+    sys.g_gamma = f1.g_gamma;
+    sys.cost = f1.cost;
+    sys.count = f1.count;
+  }
+  bool any = false;
+  for (int j = 0; j + 1 < w.frames && j < sys.kPoses; ++j) {
+    int su = 0, sv = 0;
+    if (!associate(q.center, w.motions[j + 1], w.views[j + 1], w.camera, p, su, sv)) continue;
+    FrameTerms<Scalar> f;
+    accumulate_frame_terms(q, w.views[j + 1], w.motions[j + 1], true, w.pattern, w.pattern_size, su,
+                           sv, limits, f);
+    if (f.count < p.min_frame_terms) continue;
+    sys.seen[j] = any = true;
+    C += f.C;
+    sys.g_gamma += f.g_gamma;
+    sys.B[j] = f.B;
+    sys.A[j] = f.A;
+    sys.g_xi[j] = f.g_xi;
+    sys.cost += f.cost;
+    sys.count += f.count;
+  }
+  if (!any) return;
+  if (p.estimate_quadrics) {
+    // LM on the full system: C_p + λ diag C_p; the pivot test is relative to each diagonal entry.
+    sys.L = C;
+    for (int i = 0; i < 6; ++i) {
+      sys.C_diagonal(i) = C(i, i);
+      sys.L(i, i) *= Scalar(1) + lambda;
+    }
+    const Eigen::Matrix<Scalar, 6, 1> damped_diagonal = sys.L.diagonal();
+    if (!cholesky_factor<Scalar, 6>(sys.L, Scalar(0))) return;
+    for (int i = 0; i < 6; ++i)
+      if (!(sys.L(i, i) * sys.L(i, i) >= Scalar(p.min_pivot_ratio) * damped_diagonal(i))) return;
+    sys.k = -sys.g_gamma;
+    cholesky_solve<Scalar, 6>(sys.L, sys.k);
+    for (int j = 0; j + 1 < w.frames && j < sys.kPoses; ++j) {
+      if (!sys.seen[j]) continue;
+      for (int c = 0; c < 6; ++c) {  // column c of K_j = C⁻¹ (row c of B_j)ᵀ
+        Eigen::Matrix<Scalar, 6, 1> col = sys.B[j].row(c).transpose();
+        cholesky_solve<Scalar, 6>(sys.L, col);
+        sys.K[j].col(c) = col;
+      }
+    }
+  }
+  sys.active = true;
+}
+
+/// Adds an active quadric's share to the reduced system (lower triangle of the dense
+/// n x n matrix S, n = 6 (M − 1), row-major, and s), and diag A to A_diagonal:
+///   S_jk += δ_jk A_jp − B_jp K_k,   s_j += −g_xi_j − B_jp k.
+template <typename Scalar, int MaxFrames, typename Acc>
+JPCR_HD void add_schur_terms(const JointPixelSystem<Scalar, MaxFrames>& sys, int frames,
+                             bool estimate_quadrics, Acc* S, Acc* s, Acc* A_diagonal) {
+  const int n = 6 * (frames - 1);
+  for (int j = 0; j + 1 < frames && j < sys.kPoses; ++j) {
+    if (!sys.seen[j]) continue;
+    for (int r = 0; r < 6; ++r) {
+      const int row = 6 * j + r;
+      for (int c = 0; c <= r; ++c)
+        S[row * n + 6 * j + c] += Acc(sys.A[j](r, c));
+      A_diagonal[row] += Acc(sys.A[j](r, r));
+      Scalar sr = -sys.g_xi[j](r);
+      if (estimate_quadrics) sr -= sys.B[j].row(r).dot(sys.k);
+      s[row] += Acc(sr);
+    }
+    if (!estimate_quadrics) continue;
+    for (int k = 0; k <= j; ++k) {
+      if (!sys.seen[k]) continue;
+      const Eigen::Matrix<Scalar, 6, 6> BK = sys.B[j] * sys.K[k];  // B_jp C_p⁻¹ B_kpᵀ
+      for (int r = 0; r < 6; ++r)
+        for (int c = 0; c < (k == j ? r + 1 : 6); ++c)
+          S[(6 * j + r) * n + 6 * k + c] -= Acc(BK(r, c));
+    }
+  }
+}
+
+/// Back-substitution (method.md §7): Δγ_p = C_p⁻¹ (b_p − Σ_j B_jpᵀ Δξ_j) = k − Σ_j K_j Δξ_j.
+/// pose_steps[j] is Δξ of T_{j+2}.
+template <typename Scalar, int MaxFrames>
+JPCR_HD QuadricVector<Scalar> back_substitute(const JointPixelSystem<Scalar, MaxFrames>& sys,
+                                              int frames,
+                                              const Eigen::Matrix<Scalar, 6, 1>* pose_steps) {
+  QuadricVector<Scalar> delta = sys.k;
+  for (int j = 0; j + 1 < frames && j < sys.kPoses; ++j)
+    if (sys.seen[j]) delta -= sys.K[j] * pose_steps[j];
+  return delta;
+}
+
+/// The cost Σ w r² of one quadric over the window, re-associated at the window's poses (the
+/// step test of method.md §6). Frames that see it with fewer than min_frame_terms terms, and the
+/// frame-1 terms in Q-full, are left out as in linearize_joint_pixel.
+template <typename Scalar>
+JPCR_HD Scalar joint_pixel_cost(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& w, int u,
+                                int v, const JointTermParams& p) {
+  const SampleGate<Scalar> limits = SampleGate<Scalar>::at(p.fit, q.center);
+  Scalar cost = 0;
+  int count = 0;
+  if (p.estimate_quadrics)
+    cost += frame_cost(q, w.views[0], RigidMotion<Scalar>{}, w.pattern, w.pattern_size, u, v,
+                       limits, count);
+  for (int j = 1; j < w.frames; ++j) {
+    int su = 0, sv = 0;
+    if (!associate(q.center, w.motions[j], w.views[j], w.camera, p, su, sv)) continue;
+    const Scalar c =
+        frame_cost(q, w.views[j], w.motions[j], w.pattern, w.pattern_size, su, sv, limits, count);
+    if (count >= p.min_frame_terms) cost += c;
+  }
+  return cost;
+}
+
+}  // namespace jpcr

@@ -1,0 +1,267 @@
+#include "jpcr/backend/joint_system.hpp"
+
+#include <cmath>
+
+#include <Eigen/Cholesky>
+
+#include "jpcr/backend/joint_params.hpp"
+
+namespace jpcr {
+
+namespace {
+
+std::vector<RigidMotion<double>> motions_of(const std::vector<Eigen::Isometry3d>& poses) {
+  std::vector<RigidMotion<double>> m(poses.size());
+  for (std::size_t j = 0; j < poses.size(); ++j) {
+    m[j].R = poses[j].linear();
+    m[j].t = poses[j].translation();
+  }
+  return m;
+}
+
+// One thread's share of the reduced system, merged into the total at the end (double).
+struct ReductionShare {
+  explicit ReductionShare(int n, int poses)
+      : S(static_cast<std::size_t>(n) * n, 0.0), s(n, 0.0), A_diagonal(n, 0.0), seen(poses, 0) {}
+  std::vector<double> S, s, A_diagonal;
+  std::vector<int> seen;
+  std::vector<PairFactors> factors;
+  double cost = 0.0;
+  long terms = 0;
+  int active = 0;
+};
+
+// The pixels are processed row by row; rows are handed out in small dynamic chunks because the
+// number of valid quadrics per row varies.
+constexpr int kRowChunk = 4;
+
+// The per-row loops are compiled twice on x86-64 GCC, for AVX2 + FMA (x86-64-v3) and for the
+// baseline, chosen at load time (function multi-versioning); `flatten` inlines the kernels into
+// each clone. Eigen's type layout is the translation unit's either way, so the clones share one
+// ABI (a whole translation unit built with -mavx2 would not).
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
+#define JPCR_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default"), flatten))
+#else
+#define JPCR_SIMD_CLONES
+#endif
+
+// Row v of the reference frame: each active quadric's share of the reduced system; with
+// keep_factors (M = 2) also its back-substitution factors.
+template <int MaxFrames>
+void linearize_row(const JointState& state, const JointWindowView<double>& window,
+                   const JointTermParams& p, double lambda, int v, int width, bool keep_factors,
+                   ReductionShare& share) {
+  JointPixelSystem<double, MaxFrames> sys;
+  const int M = window.frames;
+  for (int u = 0; u < width; ++u) {
+    const std::size_t i = static_cast<std::size_t>(v) * width + u;
+    if (!state.valid[i]) continue;
+    linearize_joint_pixel(state.quadrics[i], window, u, v, p, lambda, sys);
+    if (!sys.active) continue;
+    add_schur_terms(sys, M, p.estimate_quadrics, share.S.data(), share.s.data(),
+                    share.A_diagonal.data());
+    share.cost += sys.cost;
+    share.terms += sys.count;
+    ++share.active;
+    for (int j = 0; j + 1 < M; ++j)
+      share.seen[j] += sys.seen[j] ? 1 : 0;
+    if (keep_factors) share.factors.push_back(PairFactors{i, sys.k, sys.K[0]});
+  }
+}
+
+// Row v, recomputing each active quadric's system: its back-substitution and its cost at the
+// candidate (windows of M > 2, and Q-full).
+template <int MaxFrames>
+double step_row(const JointState& state, const JointWindowView<double>& window,
+                const JointWindowView<double>& next, const JointTermParams& p, double lambda,
+                const Vector6d* pose_steps, int v, int width, JointStep& out) {
+  JointPixelSystem<double, MaxFrames> sys;
+  double cost = 0.0;
+  for (int u = 0; u < width; ++u) {
+    const std::size_t i = static_cast<std::size_t>(v) * width + u;
+    if (!state.valid[i]) continue;
+    linearize_joint_pixel(state.quadrics[i], window, u, v, p, lambda, sys);
+    if (!sys.active) continue;
+    Quadricd& q = out.candidate.quadrics[i];
+    if (p.estimate_quadrics) {
+      out.quadric_steps[i] = back_substitute(sys, window.frames, pose_steps);
+      apply_quadric_update(q, out.quadric_steps[i]);
+    }
+    cost += joint_pixel_cost(q, next, u, v, p);
+  }
+  return cost;
+}
+
+// J-ftf's step from the kept factors: Δγ_p = k − K Δξ, then the candidate's cost.
+double step_factors(const PairFactors& f, const JointWindowView<double>& next,
+                    const JointTermParams& p, const Vector6d& pose_step, int width,
+                    JointStep& out) {
+  Quadricd& q = out.candidate.quadrics[f.pixel];
+  out.quadric_steps[f.pixel] = f.k - f.K * pose_step;
+  apply_quadric_update(q, out.quadric_steps[f.pixel]);
+  const int u = static_cast<int>(f.pixel % width), v = static_cast<int>(f.pixel / width);
+  return joint_pixel_cost(q, next, u, v, p);
+}
+
+// The instantiations the drivers run: J-ftf (M = 2) and a window of up to kMaxWindowFrames.
+JPCR_SIMD_CLONES void linearize_row_pair(const JointState& state,
+                                         const JointWindowView<double>& window,
+                                         const JointTermParams& p, double lambda, int v, int width,
+                                         ReductionShare& share) {
+  linearize_row<2>(state, window, p, lambda, v, width, p.estimate_quadrics, share);
+}
+JPCR_SIMD_CLONES void linearize_row_window(const JointState& state,
+                                           const JointWindowView<double>& window,
+                                           const JointTermParams& p, double lambda, int v,
+                                           int width, ReductionShare& share) {
+  linearize_row<kMaxWindowFrames>(state, window, p, lambda, v, width, false, share);
+}
+JPCR_SIMD_CLONES double step_row_window(const JointState& state,
+                                        const JointWindowView<double>& window,
+                                        const JointWindowView<double>& next,
+                                        const JointTermParams& p, double lambda,
+                                        const Vector6d* pose_steps, int v, int width,
+                                        JointStep& out) {
+  return step_row<kMaxWindowFrames>(state, window, next, p, lambda, pose_steps, v, width, out);
+}
+JPCR_SIMD_CLONES double step_factors_clone(const PairFactors& f,
+                                           const JointWindowView<double>& next,
+                                           const JointTermParams& p, const Vector6d& pose_step,
+                                           int width, JointStep& out) {
+  return step_factors(f, next, p, pose_step, width, out);
+}
+
+}  // namespace
+
+JointSystem::JointSystem(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
+                         const NeighbourhoodPattern& pattern, const JointTermParams& params)
+    : pattern_(pattern.offsets), params_(params) {
+  for (const VertexMap& f : frames)
+    views_.push_back(VertexView{f.data(), f.width(), f.height()});
+  camera_ = PinholeProjection{camera.fx, camera.fy, camera.cx, camera.cy};
+  width_ = frames.empty() ? 0 : frames[0].width();
+  height_ = frames.empty() ? 0 : frames[0].height();
+}
+
+ReducedSystem JointSystem::linearize(const JointState& state, double lambda) const {
+  const int M = frames(), n = 6 * (M - 1);
+  const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
+  const JointWindowView<double> window{
+      views_.data(), motions.data(),  M,
+      camera_,       pattern_.data(), static_cast<int>(pattern_.size())};
+  ReductionShare total(n, M - 1);
+#pragma omp parallel
+  {
+    ReductionShare share(n, M - 1);
+#pragma omp for schedule(dynamic, kRowChunk) nowait
+    for (int v = 0; v < height_; ++v) {
+      if (M == 2)
+        linearize_row_pair(state, window, params_, lambda, v, width_, share);
+      else
+        linearize_row_window(state, window, params_, lambda, v, width_, share);
+    }
+#pragma omp critical(jpcr_joint_reduce)
+    {
+      for (std::size_t k = 0; k < total.S.size(); ++k)
+        total.S[k] += share.S[k];
+      for (int k = 0; k < n; ++k) {
+        total.s[k] += share.s[k];
+        total.A_diagonal[k] += share.A_diagonal[k];
+      }
+      for (int j = 0; j + 1 < M; ++j)
+        total.seen[j] += share.seen[j];
+      total.cost += share.cost;
+      total.terms += share.terms;
+      total.active += share.active;
+      total.factors.insert(total.factors.end(), share.factors.begin(), share.factors.end());
+    }
+  }
+  ReducedSystem out;
+  // total.S is row-major with its lower triangle filled: as a column-major map that is the upper
+  // triangle of S.
+  out.S = Eigen::Map<const Eigen::MatrixXd>(total.S.data(), n, n).selfadjointView<Eigen::Upper>();
+  out.s = Eigen::Map<const Eigen::VectorXd>(total.s.data(), n);
+  out.A_diagonal = Eigen::Map<const Eigen::VectorXd>(total.A_diagonal.data(), n);
+  out.cost = total.cost;
+  out.terms = total.terms;
+  out.active = total.active;
+  out.seen = std::move(total.seen);
+  out.factors = std::move(total.factors);
+  return out;
+}
+
+JointStep JointSystem::start_step(const JointState& state,
+                                  const std::vector<Vector6d>& pose_steps) const {
+  JointStep out;
+  out.pose_steps = pose_steps;
+  out.candidate = state;
+  for (int j = 1; j < frames(); ++j) {
+    Eigen::Isometry3d T = se3_exp(pose_steps[j - 1]) * state.poses[j];  // T ← exp(Δξ^) T
+    T.linear() = orthonormalize(T.linear());
+    out.candidate.poses[j] = T;
+  }
+  out.quadric_steps.assign(state.quadrics.size(), QuadricVector<double>::Zero());
+  return out;
+}
+
+JointStep JointSystem::step_pair(const JointState& state, const ReducedSystem& system,
+                                 const std::vector<Vector6d>& pose_steps) const {
+  JointStep out = start_step(state, pose_steps);
+  const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
+  const JointWindowView<double> next{views_.data(),   moved.data(),
+                                     frames(),        camera_,
+                                     pattern_.data(), static_cast<int>(pattern_.size())};
+  const long count = static_cast<long>(system.factors.size());
+  double cost = 0.0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : cost)
+  for (long k = 0; k < count; ++k)
+    cost += step_factors_clone(system.factors[static_cast<std::size_t>(k)], next, params_,
+                               pose_steps[0], width_, out);
+  out.cost = cost;
+  return out;
+}
+
+JointStep JointSystem::step_window(const JointState& state, double lambda,
+                                   const std::vector<Vector6d>& pose_steps) const {
+  JointStep out = start_step(state, pose_steps);
+  const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
+  const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
+  const int M = frames(), pattern_size = static_cast<int>(pattern_.size());
+  const JointWindowView<double> window{views_.data(), motions.data(),  M,
+                                       camera_,       pattern_.data(), pattern_size};
+  const JointWindowView<double> next{views_.data(), moved.data(),    M,
+                                     camera_,       pattern_.data(), pattern_size};
+  double cost = 0.0;
+#pragma omp parallel for schedule(dynamic, kRowChunk) reduction(+ : cost)
+  for (int v = 0; v < height_; ++v)
+    cost +=
+        step_row_window(state, window, next, params_, lambda, pose_steps.data(), v, width_, out);
+  out.cost = cost;
+  return out;
+}
+
+JointStep JointSystem::step(const JointState& state, const ReducedSystem& system, double lambda,
+                            const std::vector<Vector6d>& pose_steps) const {
+  // J-ftf keeps its factors; Q-full has no quadric step and M = 2 Q-full keeps none, so it
+  // recomputes (cheaply: no C_p) like the windows.
+  if (frames() == 2 && params_.estimate_quadrics) return step_pair(state, system, pose_steps);
+  return step_window(state, lambda, pose_steps);
+}
+
+bool JointSystem::solve_poses(const ReducedSystem& system, double lambda,
+                              std::vector<Vector6d>& pose_steps) {
+  Eigen::MatrixXd S = system.S;
+  S.diagonal() += lambda * system.A_diagonal;  // LM on the full system: λ diag A
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(S);
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+  const Eigen::VectorXd x = ldlt.solve(system.s);
+  if (!x.allFinite()) return false;
+  const double max_pivot = ldlt.vectorD().cwiseAbs().maxCoeff();
+  if (!(ldlt.vectorD().minCoeff() > 1e-14 * max_pivot)) return false;  // rank-deficient S
+  pose_steps.resize(static_cast<std::size_t>(x.size() / 6));
+  for (std::size_t j = 0; j < pose_steps.size(); ++j)
+    pose_steps[j] = x.segment<6>(6 * static_cast<Eigen::Index>(j));
+  return true;
+}
+
+}  // namespace jpcr

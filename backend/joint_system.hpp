@@ -1,0 +1,96 @@
+// The CPU driver of the joint normal equations (method.md §6–§8): loops the per-pixel kernels of
+// joint_pixel_kernel.hpp over the reference frame in parallel, reduces the reduced system
+// (S, s) in double, solves it for the poses and back-substitutes the quadrics. The
+// Levenberg-Marquardt loop around it is in joint_window.cpp.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "jpcr/backend/joint_pixel_kernel.hpp"
+#include "jpcr/quadric/camera.hpp"
+#include "jpcr/quadric/se3.hpp"
+#include "jpcr/quadric/vertex_map.hpp"
+
+namespace jpcr {
+
+/// The unknowns of a window: T_1 … T_M (T_1 = I, the gauge) and one quadric per pixel of the
+/// reference frame (row-major), where Quad IT gave one.
+struct JointState {
+  std::vector<Eigen::Isometry3d> poses;
+  std::vector<Quadricd> quadrics;
+  std::vector<unsigned char> valid;  // 1 where the pixel has a quadric
+};
+
+/// What the back-substitution of J-ftf needs of one active quadric, kept from its linearisation:
+/// Δγ_p = k − K Δξ (42 numbers). Only for M = 2; larger windows would keep (M − 1)·36 + 6 numbers
+/// per quadric (over 1 kB at M = 5) and recompute the system instead.
+struct PairFactors {
+  std::size_t pixel = 0;    // row-major index in the reference frame
+  QuadricVector<double> k;  // C_p⁻¹ b_p
+  Matrix6d K;               // C_p⁻¹ B_pᵀ
+};
+
+/// S = A − Σ_p B_p C_p⁻¹ B_pᵀ and s = a − Σ_p B_p C_p⁻¹ b_p (n = 6 (M − 1)), with the damping λ
+/// already in C_p but not in A (solve_poses adds λ diag A).
+struct ReducedSystem {
+  Eigen::MatrixXd S;
+  Eigen::VectorXd s;
+  Eigen::VectorXd A_diagonal;
+  double cost = 0.0;                 // Σ w r² over the active quadrics
+  long terms = 0;                    // their terms inside the gate
+  int active = 0;                    // quadrics taking part
+  std::vector<int> seen;             // per pose T_2 … T_M: active quadrics that frame sees
+  std::vector<PairFactors> factors;  // M = 2: every active quadric's back-substitution factors
+};
+
+/// A proposed step and where it leads.
+struct JointStep {
+  std::vector<Vector6d> pose_steps;                  // Δξ of T_2 … T_M
+  std::vector<QuadricVector<double>> quadric_steps;  // Δγ_p per pixel, 0 where inactive
+  JointState candidate;                              // exp(Δξ^) T, γ ⊕ Δγ
+  double cost = 0.0;  // Σ w r² at the candidate over the quadrics active in the linearisation
+};
+
+class JointSystem {
+ public:
+  /// frames[0] is the reference; all frames share `camera` (sizes are checked by the caller).
+  JointSystem(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
+              const NeighbourhoodPattern& pattern, const JointTermParams& params);
+
+  int frames() const { return static_cast<int>(views_.size()); }
+  const JointTermParams& params() const { return params_; }
+
+  /// The reduced system at `state`, with the Levenberg damping λ on C_p.
+  ReducedSystem linearize(const JointState& state, double lambda) const;
+
+  /// Solves (S + λ diag A) Δξ = s with LDLT; false when it is not positive definite or the step
+  /// is not finite.
+  static bool solve_poses(const ReducedSystem& system, double lambda,
+                          std::vector<Vector6d>& pose_steps);
+
+  /// Back-substitutes Δγ_p for the poses' step and evaluates the cost of the candidate,
+  /// re-associated at the new poses. `system` and λ are those of linearize(state, λ): J-ftf
+  /// uses the factors kept in `system`, larger windows recompute each quadric's system.
+  JointStep step(const JointState& state, const ReducedSystem& system, double lambda,
+                 const std::vector<Vector6d>& pose_steps) const;
+
+ private:
+  template <int MaxFrames>
+  ReducedSystem linearize_impl(const JointState& state, double lambda) const;
+  JointStep step_pair(const JointState& state, const ReducedSystem& system,
+                      const std::vector<Vector6d>& pose_steps) const;
+  JointStep step_window(const JointState& state, double lambda,
+                        const std::vector<Vector6d>& pose_steps) const;
+  JointStep start_step(const JointState& state, const std::vector<Vector6d>& pose_steps) const;
+
+  std::vector<VertexView> views_;
+  PinholeProjection camera_;
+  std::vector<PixelOffset> pattern_;
+  JointTermParams params_;
+  int width_ = 0, height_ = 0;
+};
+
+}  // namespace jpcr

@@ -1,0 +1,35 @@
+// J-full (method.md §7): joint refinement of the poses T_2 … T_M of a window of M keyframes and
+// the dense quadrics of the reference keyframe, by Levenberg-Marquardt on the Schur-reduced
+// system (joint_system.hpp). J-ftf (joint_frame_to_frame.hpp) is the window M = 2 and Q-full
+// (fixed_quadric_alignment.hpp) the window with the quadrics held fixed; all three run the
+// loop of refine_window.
+#pragma once
+
+#include "jpcr/backend/refiner.hpp"
+
+namespace jpcr {
+
+class JointWindow final : public Refiner {
+ public:
+  explicit JointWindow(const JointParams& params = {});
+  using Refiner::refine;
+  RefinementResult refine(const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
+                          const std::vector<Eigen::Isometry3d>& initial_poses,
+                          const QuadricMap& initial_quadrics) const override;
+  std::string name() const override { return "j-full"; }
+  const JointParams& params() const override { return params_; }
+
+ private:
+  JointParams params_;
+};
+
+/// The shared Levenberg-Marquardt loop (method.md §6 "Update"): linearise, solve the reduced
+/// system, back-substitute, accept the step only when Σ w r² does not increase (else raise λ on
+/// diag A and diag C_p and retry). estimate_quadrics = false is Q-full.
+RefinementResult refine_window(const std::vector<VertexMap>& vertices,
+                               const CameraIntrinsics& camera,
+                               const std::vector<Eigen::Isometry3d>& initial_poses,
+                               const QuadricMap& initial_quadrics, const JointParams& params,
+                               bool estimate_quadrics, const std::string& method);
+
+}  // namespace jpcr

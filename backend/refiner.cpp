@@ -1,0 +1,66 @@
+#include "jpcr/backend/refiner.hpp"
+
+#include <stdexcept>
+
+#include "jpcr/backend/fixed_quadric_alignment.hpp"
+#include "jpcr/backend/joint_frame_to_frame.hpp"
+#include "jpcr/backend/joint_window.hpp"
+#include "jpcr/quadric/error.hpp"
+#include "jpcr/quadric/quadric_fit.hpp"
+
+namespace jpcr {
+
+namespace {
+
+bool same_camera(const CameraIntrinsics& a, const CameraIntrinsics& b) {
+  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.width == b.width &&
+         a.height == b.height;
+}
+
+}  // namespace
+
+RefinementResult Refiner::refine(const std::vector<Frame>& frames,
+                                 const std::vector<Eigen::Isometry3d>& initial_poses) const {
+  if (frames.empty()) throw std::invalid_argument(name() + ": no frames");
+  const CameraIntrinsics& camera = frames[0].camera;
+  std::vector<VertexMap> vertices;
+  for (const Frame& f : frames) {
+    if (!same_camera(f.camera, camera))
+      throw std::invalid_argument(name() + ": the frames differ in size or intrinsics");
+    vertices.push_back(compute_vertex_map(f.depth, camera));  // throws on a size mismatch
+  }
+  const QuadricMap initial = QuadricFit(params().quadric).estimate(vertices[0]);
+  return refine(vertices, camera, initial_poses, initial);
+}
+
+JointFrameToFrame::JointFrameToFrame(const JointParams& params) : params_(params) {
+  params_.validate();
+}
+
+RefinementResult JointFrameToFrame::refine(const std::vector<VertexMap>& vertices,
+                                           const CameraIntrinsics& camera,
+                                           const std::vector<Eigen::Isometry3d>& initial_poses,
+                                           const QuadricMap& initial_quadrics) const {
+  if (vertices.size() != 2) throw std::invalid_argument("j-ftf: needs exactly two frames");
+  return refine_window(vertices, camera, initial_poses, initial_quadrics, params_, true, name());
+}
+
+FixedQuadricAlignment::FixedQuadricAlignment(const JointParams& params) : params_(params) {
+  params_.validate();
+}
+
+RefinementResult FixedQuadricAlignment::refine(const std::vector<VertexMap>& vertices,
+                                               const CameraIntrinsics& camera,
+                                               const std::vector<Eigen::Isometry3d>& initial_poses,
+                                               const QuadricMap& initial_quadrics) const {
+  return refine_window(vertices, camera, initial_poses, initial_quadrics, params_, false, name());
+}
+
+std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams& params) {
+  if (name == "j-ftf") return std::make_unique<JointFrameToFrame>(params);
+  if (name == "j-full") return std::make_unique<JointWindow>(params);
+  if (name == "q-full") return std::make_unique<FixedQuadricAlignment>(params);
+  throw InputError("refiner: '" + name + "' is not one of j-ftf, j-full, q-full");
+}
+
+}  // namespace jpcr

@@ -1,0 +1,81 @@
+// The one small interface the back end's refiners share (architecture.md "Interfaces"):
+//
+//   refine(frames, initial poses) -> {poses, quadric map, covariance, report}
+//
+// Poses follow method.md §1: T_j maps frame j into the reference frame 1, and T_1 = I is fixed
+// (the gauge). A pipeline holding camera-to-world poses passes T_j = T_w1⁻¹ T_wj. The refiners
+// are J-ftf (JointFrameToFrame, "j-ftf"), J-full (JointWindow, "j-full") and Q-full
+// (FixedQuadricAlignment, "q-full"); make_refiner picks one by name.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+#include "jpcr/backend/joint_params.hpp"
+#include "jpcr/quadric/frame.hpp"
+#include "jpcr/quadric/quadric_map.hpp"
+#include "jpcr/quadric/se3.hpp"
+
+namespace jpcr {
+
+enum class RefinementVerdict {
+  kConverged,       // the last step was below the tolerances
+  kMaxIterations,   // still moving after max_iterations accepted steps
+  kDiverged,        // the cost could not be lowered (damping ran away) or became non-finite
+  kTooFewQuadrics,  // too few quadrics are seen in another frame (no overlap) or a pose is unseen
+};
+
+/// "converged", "max_iterations", "diverged", "too_few_quadrics".
+const char* to_string(RefinementVerdict verdict);
+
+/// Whether a result can be trusted (architecture.md: every result says so).
+struct RefinementReport {
+  std::string method;  // "j-ftf", "j-full" or "q-full"
+  RefinementVerdict verdict = RefinementVerdict::kDiverged;
+  int iterations = 0;              // accepted steps
+  int rejected_steps = 0;          // steps that raised the cost (then damped and retried)
+  std::vector<double> cost;        // Σ w r² (m²) at the start and after each accepted step
+  int active_quadrics = 0;         // quadrics taking part at the end
+  std::vector<int> seen;           // per pose T_2 … T_M: active quadrics that frame sees
+  long terms = 0;                  // residual terms inside the gate at the end
+  double residual_variance = 0.0;  // m²: final cost / (terms − unknowns)
+  double damping = 0.0;            // λ at the end
+  double degeneracy = 0.0;         // smallest / largest eigenvalue of the reduced system S
+
+  bool converged() const { return verdict == RefinementVerdict::kConverged; }
+};
+
+struct RefinementResult {
+  std::vector<Eigen::Isometry3d> poses;  // T_1 = I, T_2 … T_M (frame j → frame 1)
+  QuadricMap quadrics;                   // the reference frame's quadrics, curvature recomputed
+  std::vector<Matrix6d> covariance;  // per pose, (v, ω) order: σ² S⁻¹ blocks; [0] = 0 (gauge)
+  RefinementReport report;
+};
+
+class Refiner {
+ public:
+  virtual ~Refiner() = default;
+
+  /// From depth frames (frames[0] is the reference): vertex maps, Quad IT on the reference
+  /// (the initial quadrics), then the refinement. Throws std::invalid_argument when the frames
+  /// differ in size or intrinsics, or the poses do not match them.
+  RefinementResult refine(const std::vector<Frame>& frames,
+                          const std::vector<Eigen::Isometry3d>& initial_poses) const;
+
+  /// From vertex maps and initial quadrics on vertices[0] (e.g. Quad IT from the GPU).
+  virtual RefinementResult refine(const std::vector<VertexMap>& vertices,
+                                  const CameraIntrinsics& camera,
+                                  const std::vector<Eigen::Isometry3d>& initial_poses,
+                                  const QuadricMap& initial_quadrics) const = 0;
+
+  virtual std::string name() const = 0;
+  virtual const JointParams& params() const = 0;
+};
+
+/// "j-ftf", "j-full" or "q-full"; throws InputError naming the choices otherwise.
+std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams& params = {});
+
+}  // namespace jpcr

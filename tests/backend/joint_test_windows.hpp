@@ -1,0 +1,64 @@
+// Rendered windows for the joint refiners: frames of the room_spheres scene from nearby poses,
+// with the exact relative poses T_j (frame j → frame 1), and pose perturbations.
+#pragma once
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "../quadric/quadric_test_scenes.hpp"
+#include "jpcr/io/synthetic_scene.hpp"
+#include "jpcr/quadric/se3.hpp"
+
+namespace jpcr::test {
+
+struct JointTestWindow {
+  CameraIntrinsics camera;
+  std::vector<SyntheticFrame> frames;
+  std::vector<VertexMap> vertices;
+  std::vector<Eigen::Isometry3d> truth;  // T_j = T_w1⁻¹ T_wj, truth[0] = I
+};
+
+/// `count` frames of room_spheres at `width` x 3/4 width. Frame j is the scene's view moved by
+/// j times a 3 cm / 1° camera motion; range noise "range:K" optional.
+inline JointTestWindow render_window(int count, int width, const std::string& noise = "none") {
+  const SyntheticScene scene = load_scene("room_spheres");
+  JointTestWindow w;
+  w.camera = synthetic_camera(width, width * 3 / 4);
+  const Eigen::Isometry3d first = look_from(scene.view.eye, scene.view.target);
+  const Vector6d motion =
+      (Vector6d() << 0.025, -0.01, 0.012, 0.2 * M_PI / 180, 0.9 * M_PI / 180, -0.3 * M_PI / 180)
+          .finished();
+  for (int j = 0; j < count; ++j) {
+    const Eigen::Isometry3d pose = first * se3_exp(j * motion);
+    w.frames.push_back(render(scene, w.camera, pose, parse_noise(noise), 7, j));
+    w.vertices.push_back(compute_vertex_map(w.frames.back().frame.depth, w.camera));
+    w.truth.push_back(first.inverse() * pose);
+  }
+  w.truth[0] = Eigen::Isometry3d::Identity();
+  return w;
+}
+
+/// exp(δ) T with δ of `metres` translation and `degrees` rotation about fixed skew axes, the
+/// sign alternating with `index` so the poses of a window are perturbed differently.
+inline Eigen::Isometry3d perturbed(const Eigen::Isometry3d& T, double metres, double degrees,
+                                   int index = 0) {
+  const double s = index % 2 == 0 ? 1.0 : -1.0;
+  const Eigen::Vector3d t = Eigen::Vector3d(1, -2, 2).normalized() * metres * s;
+  const Eigen::Vector3d w = Eigen::Vector3d(-2, 1, 2).normalized() * degrees * M_PI / 180 * s;
+  Vector6d xi;
+  xi << t, w;
+  return se3_exp(xi) * T;
+}
+
+struct PoseError {
+  double translation = 0.0;  // m
+  double rotation = 0.0;     // deg
+};
+
+inline PoseError pose_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {
+  const Eigen::Isometry3d E = truth.inverse() * estimate;
+  return {E.translation().norm(), rotation_angle(E.linear()) * 180.0 / M_PI};
+}
+
+}  // namespace jpcr::test

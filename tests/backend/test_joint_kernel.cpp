@@ -1,0 +1,248 @@
+// The per-pixel joint kernel (backend/joint_pixel_kernel.hpp): analytic pose and quadric
+// Jacobians of the frame-j residual against central differences, and the Schur-complement step
+// of JointSystem against a dense solve of the full normal equations.
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <Eigen/Cholesky>
+
+#include "joint_test_windows.hpp"
+#include "jpcr/backend/joint_params.hpp"
+#include "jpcr/backend/joint_system.hpp"
+#include "jpcr/quadric/quadric_fit.hpp"
+
+namespace jpcr {
+namespace {
+
+using test::JointTestWindow;
+using test::perturbed;
+using test::render_window;
+
+RigidMotion<double> motion(const Eigen::Isometry3d& T) {
+  RigidMotion<double> m;
+  m.R = T.linear();
+  m.t = T.translation();
+  return m;
+}
+
+// The residual of a fixed frame-2 sample Q as a function of the pose and the quadric:
+// r(exp(ξ^) T Q; γ ⊕ Δγ). Central differences with h = 1e-6 have truncation error ~h² |r'''|
+// and rounding error ~1e-16 / h; both stay below 1e-8 of the derivatives here.
+TEST(JointPixelKernel, FrameTwoJacobiansMatchCentralDifferences) {
+  const JointTestWindow w = render_window(2, 320);
+  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  const JointTermParams params = JointParams{}.terms(true);
+  const PinholeProjection cam{w.camera.fx, w.camera.fy, w.camera.cx, w.camera.cy};
+  const VertexView view2{w.vertices[1].data(), w.vertices[1].width(), w.vertices[1].height()};
+  const Eigen::Isometry3d T = perturbed(w.truth[1], 0.01, 1.0);
+  const double h = 1e-6;
+  int checked = 0;
+  for (int v = 20; v < w.camera.height; v += 37) {
+    for (int u = 20; u < w.camera.width; u += 41) {
+      if (!map.valid(u, v)) continue;
+      Quadricd q = map.quadrics(u, v).cast<double>();
+      q.a += 0.7, q.b -= 0.3, q.c += 0.4, q.t_z += 1e-3;  // curved, so every term is exercised
+      int su = 0, sv = 0;
+      if (!associate(q.center, motion(T), view2, cam, params, su, sv)) continue;
+      for (const PixelOffset& o : pattern.offsets) {
+        if (!view2.in_bounds(su + o.du, sv + o.dv)) continue;
+        const Eigen::Vector3d Q = view2(su + o.du, sv + o.dv).cast<double>();
+        if (!std::isfinite(Q.z())) continue;
+        const Eigen::Vector3d X = T * Q;
+        const QuadricLinearization<double> l = linearize_quadric(q, X);
+        const Vector6d J_xi = quadric_pose_jacobian(q, l, X);
+        for (int i = 0; i < 6; ++i) {
+          const Vector6d e = Vector6d::Unit(i) * h;
+          const double d_xi = (quadric_residual(q, Eigen::Vector3d(se3_exp(e) * T * Q)) -
+                               quadric_residual(q, Eigen::Vector3d(se3_exp(-e) * T * Q))) /
+                              (2 * h);
+          Quadricd qp = q, qm = q;
+          apply_quadric_update(qp, QuadricVector<double>(e));
+          apply_quadric_update(qm, QuadricVector<double>(-e));
+          const double d_gamma = (quadric_residual(qp, X) - quadric_residual(qm, X)) / (2 * h);
+          EXPECT_NEAR(J_xi(i), d_xi, 1e-8 * (1 + std::abs(d_xi))) << "xi " << i;
+          EXPECT_NEAR(l.J(i), d_gamma, 1e-8 * (1 + std::abs(d_gamma))) << "gamma " << i;
+        }
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 2000);
+}
+
+// The same through the kernel's sums: with the association and the weights fixed,
+// g_xi = ½ ∂/∂ξ Σ w r², g_gamma = ½ ∂/∂γ Σ w r² and B = Σ w J_ξ J_γᵀ of the numeric Jacobians.
+TEST(JointPixelKernel, FrameTermSumsMatchNumericJacobians) {
+  const JointTestWindow w = render_window(2, 320);
+  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  const JointTermParams params = JointParams{}.terms(true);
+  const PinholeProjection cam{w.camera.fx, w.camera.fy, w.camera.cx, w.camera.cy};
+  const VertexView view2{w.vertices[1].data(), w.vertices[1].width(), w.vertices[1].height()};
+  const Eigen::Isometry3d T = perturbed(w.truth[1], 0.005, 0.5);
+  const double h = 1e-6;
+  int checked = 0;
+  for (int v = 30; v < w.camera.height; v += 53) {
+    for (int u = 30; u < w.camera.width; u += 59) {
+      if (!map.valid(u, v)) continue;
+      const Quadricd q = map.quadrics(u, v).cast<double>();
+      int su = 0, sv = 0;
+      if (!associate(q.center, motion(T), view2, cam, params, su, sv)) continue;
+      const SampleGate<double> limits = SampleGate<double>::at(params.fit, q.center);
+      FrameTerms<double> f;
+      accumulate_frame_terms(q, view2, motion(T), true, pattern.offsets.data(), pattern.size(), su,
+                             sv, limits, f);
+      if (f.count < params.min_frame_terms) continue;
+      // Numeric Jacobian rows of the gated samples, weights frozen at the linearisation point.
+      Matrix6d B = Matrix6d::Zero();
+      Vector6d g_xi = Vector6d::Zero(), g_gamma = Vector6d::Zero();
+      for (const PixelOffset& o : pattern.offsets) {
+        if (!view2.in_bounds(su + o.du, sv + o.dv)) continue;
+        const Eigen::Vector3d Q = view2(su + o.du, sv + o.dv).cast<double>();
+        if (!std::isfinite(Q.z())) continue;
+        const Eigen::Vector3d X = T * Q;
+        const double r = quadric_residual(q, X);
+        if (std::abs(r) > limits.gate) continue;
+        const double wgt = fair_weight(r, (X - q.center).squaredNorm(), limits.n0);
+        Vector6d Jx, Jg;
+        for (int i = 0; i < 6; ++i) {
+          const Vector6d e = Vector6d::Unit(i) * h;
+          Jx(i) = (quadric_residual(q, Eigen::Vector3d(se3_exp(e) * T * Q)) -
+                   quadric_residual(q, Eigen::Vector3d(se3_exp(-e) * T * Q))) /
+                  (2 * h);
+          Quadricd qp = q, qm = q;
+          apply_quadric_update(qp, QuadricVector<double>(e));
+          apply_quadric_update(qm, QuadricVector<double>(-e));
+          Jg(i) = (quadric_residual(qp, X) - quadric_residual(qm, X)) / (2 * h);
+        }
+        B += wgt * Jx * Jg.transpose();
+        g_xi += wgt * r * Jx;
+        g_gamma += wgt * r * Jg;
+      }
+      EXPECT_LT((f.B - B).norm(), 1e-7 * B.norm());
+      EXPECT_LT((f.g_xi - g_xi).norm(), 1e-7 * g_xi.norm() + 1e-15);
+      EXPECT_LT((f.g_gamma - g_gamma).norm(), 1e-7 * g_gamma.norm() + 1e-15);
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 10);
+}
+
+// The full normal equations of a small window, assembled explicitly: unknowns (ξ_2 … ξ_M, γ_1 …
+// γ_P), H = Σ w JᵀJ with the LM damping H_ii (1 + λ), solved densely.
+struct DenseStep {
+  Eigen::VectorXd poses, quadrics;
+};
+
+DenseStep dense_step(const JointTestWindow& w, const JointState& state, const JointTermParams& p,
+                     const NeighbourhoodPattern& pattern, double lambda) {
+  const int M = static_cast<int>(state.poses.size()), np = 6 * (M - 1);
+  std::vector<VertexView> views;
+  std::vector<RigidMotion<double>> motions;
+  for (int j = 0; j < M; ++j) {
+    views.push_back({w.vertices[j].data(), w.vertices[j].width(), w.vertices[j].height()});
+    motions.push_back(motion(state.poses[j]));
+  }
+  const JointWindowView<double> window{views.data(),
+                                       motions.data(),
+                                       M,
+                                       {w.camera.fx, w.camera.fy, w.camera.cx, w.camera.cy},
+                                       pattern.offsets.data(),
+                                       pattern.size()};
+  // The quadrics that take part (the same rule as the driver: linearize_joint_pixel says so).
+  std::vector<std::pair<std::size_t, JointPixelSystem<double, kMaxWindowFrames>>> active;
+  for (std::size_t i = 0; i < state.valid.size(); ++i) {
+    if (!state.valid[i]) continue;
+    JointPixelSystem<double, kMaxWindowFrames> sys;
+    const int u = static_cast<int>(i % w.camera.width), v = static_cast<int>(i / w.camera.width);
+    linearize_joint_pixel(state.quadrics[i], window, u, v, p, lambda, sys);
+    if (sys.active) active.emplace_back(i, sys);
+  }
+  const int N = np + 6 * static_cast<int>(active.size());
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(N, N);
+  Eigen::VectorXd g = Eigen::VectorXd::Zero(N);
+  for (std::size_t k = 0; k < active.size(); ++k) {
+    const std::size_t i = active[k].first;
+    const Quadricd& q = state.quadrics[i];
+    const int u = static_cast<int>(i % w.camera.width), v = static_cast<int>(i / w.camera.width);
+    const int col = np + 6 * static_cast<int>(k);
+    const SampleGate<double> limits = SampleGate<double>::at(p.fit, q.center);
+    for (int j = 0; j < M; ++j) {
+      FrameTerms<double> f;
+      int su = u, sv = v;
+      if (j > 0) {
+        if (!active[k].second.seen[j - 1]) continue;
+        EXPECT_TRUE(associate(q.center, motions[j], views[j], window.camera, p, su, sv));
+      }
+      accumulate_frame_terms(q, views[j], motions[j], j > 0, pattern.offsets.data(), pattern.size(),
+                             su, sv, limits, f);
+      const Matrix6d C = f.C.selfadjointView<Eigen::Lower>();
+      H.block<6, 6>(col, col) += C;
+      g.segment<6>(col) += f.g_gamma;
+      if (j == 0) continue;
+      const int row = 6 * (j - 1);
+      const Matrix6d A = f.A.selfadjointView<Eigen::Lower>();
+      H.block<6, 6>(row, row) += A;
+      H.block<6, 6>(row, col) += f.B;
+      H.block<6, 6>(col, row) += f.B.transpose();
+      g.segment<6>(row) += f.g_xi;
+    }
+  }
+  H.diagonal() *= 1.0 + lambda;
+  const Eigen::VectorXd x = H.ldlt().solve(-g);
+  return {x.head(np), x.tail(N - np)};
+}
+
+class SchurStep : public ::testing::TestWithParam<int> {};
+
+TEST_P(SchurStep, EqualsTheDenseSolveOfTheFullSystem) {
+  const int M = GetParam();
+  const JointTestWindow w = render_window(M, 320);
+  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  const JointTermParams p = JointParams{}.terms(true);
+  JointState state;
+  for (int j = 0; j < M; ++j)
+    state.poses.push_back(j == 0 ? w.truth[0] : perturbed(w.truth[j], 0.01, 1.0, j));
+  state.quadrics.resize(map.status.size());
+  state.valid.assign(map.status.size(), 0);
+  int chosen = 0;
+  for (int v = 24; v < w.camera.height; v += 36)
+    for (int u = 24; u < w.camera.width; u += 36) {
+      const std::size_t i = static_cast<std::size_t>(v) * w.camera.width + u;
+      if (!map.valid(u, v) || chosen == 50) continue;
+      state.quadrics[i] = map.quadrics(u, v).cast<double>();
+      state.valid[i] = 1;
+      ++chosen;
+    }
+  const double lambda = 1e-3;
+  const JointSystem system(w.vertices, w.camera, pattern, p);
+  const ReducedSystem lin = system.linearize(state, lambda);
+  ASSERT_GT(lin.active, 20);
+  std::vector<Vector6d> pose_steps;
+  ASSERT_TRUE(JointSystem::solve_poses(lin, lambda, pose_steps));
+  const JointStep step = system.step(state, lin, lambda, pose_steps);
+  const DenseStep dense = dense_step(w, state, p, pattern, lambda);
+
+  Eigen::VectorXd schur_poses(6 * (M - 1));
+  for (int j = 0; j + 1 < M; ++j)
+    schur_poses.segment<6>(6 * j) = pose_steps[j];
+  Eigen::VectorXd schur_quadrics(dense.quadrics.size());
+  int k = 0;
+  for (std::size_t i = 0; i < state.valid.size(); ++i)
+    if (state.valid[i] && !step.quadric_steps[i].isZero(0.0))
+      schur_quadrics.segment<6>(6 * k++) = step.quadric_steps[i];
+  ASSERT_EQ(6 * k, dense.quadrics.size());
+  const double e_pose = (schur_poses - dense.poses).norm() / dense.poses.norm();
+  const double e_quadric = (schur_quadrics - dense.quadrics).norm() / dense.quadrics.norm();
+  std::printf("M = %d, %d quadrics: relative difference poses %.2e, quadrics %.2e\n", M, k, e_pose,
+              e_quadric);
+  EXPECT_LT(e_pose, 1e-9);
+  EXPECT_LT(e_quadric, 1e-9);
+}
+
+INSTANTIATE_TEST_SUITE_P(TwoAndFourPoses, SchurStep, ::testing::Values(2, 4));
+
+}  // namespace
+}  // namespace jpcr
