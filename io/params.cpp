@@ -163,6 +163,34 @@ void read_quadric(YamlSection yaml, QuadricParams& p) {
   yaml.finish();
 }
 
+// Section `joint:` (backend/joint_params.hpp).
+void read_joint(YamlSection yaml, JointParams& p) {
+  yaml.read("max_iterations", p.max_iterations);
+  yaml.read("translation_tolerance", p.translation_tolerance);
+  yaml.read("rotation_tolerance", p.rotation_tolerance);
+  yaml.read("occlusion_threshold", p.occlusion_threshold);
+  yaml.read("occlusion_fraction", p.occlusion_fraction);
+  yaml.read("min_frame_terms", p.min_frame_terms);
+  yaml.read("min_pivot_ratio", p.min_pivot_ratio);
+  yaml.read("initial_damping", p.initial_damping);
+  yaml.read("damping_factor", p.damping_factor);
+  yaml.read("max_damping", p.max_damping);
+  yaml.read("min_active_quadrics", p.min_active_quadrics);
+  yaml.finish();
+  validate_in(yaml, p);
+}
+
+// Section `pipeline:` (backend/keyframe_pipeline.hpp).
+void read_pipeline(YamlSection yaml, PipelineParams& p) {
+  std::string method = to_string(p.method);
+  yaml.read_choice("method", method, {"icp-ftf", "j-ftf", "j-full", "q-full", "pipeline"});
+  p.method = parse_pipeline_method(method);
+  yaml.read("window", p.window);
+  if (p.window < 2 || p.window > kMaxWindowFrames)
+    yaml.fail("window", "must be in [2, " + std::to_string(kMaxWindowFrames) + "] keyframes");
+  yaml.finish();
+}
+
 }  // namespace
 
 Params load_params(const std::string& path) {
@@ -177,7 +205,12 @@ Params parse_params(const std::string& text, const std::string& path) {
   read_frontend(yaml.section("frontend"), params.frontend);
   read_quadric(yaml.section("quadric"), params.quadric);
   read_dds_config(yaml.section("dds"), params.dds);
+  read_joint(yaml.section("joint"), params.joint);
+  read_pipeline(yaml.section("pipeline"), params.pipeline);
   yaml.finish();
+  params.joint.quadric = params.quadric;
+  params.pipeline.frontend = params.frontend;
+  params.pipeline.joint = params.joint;
   return params;
 }
 

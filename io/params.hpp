@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "jpcr/backend/keyframe_pipeline.hpp"
 #include "jpcr/frontend/frontend_params.hpp"
 #include "jpcr/io/dds/dds_config.hpp"
 #include "jpcr/io/synthetic_noise.hpp"
@@ -27,8 +28,11 @@ struct Params {
   DatasetParams dataset;
   SyntheticParams synthetic;
   FrontendParams frontend;  // section `frontend:` (jpcr_odometry, the tracker)
-  QuadricParams quadric;  // section `quadric:` (pattern, normals, Quad IT)
-  DdsConfig dds;  // section `dds:` (io/dds/dds_config.hpp)
+  QuadricParams quadric;    // section `quadric:` (pattern, normals, Quad IT)
+  DdsConfig dds;            // section `dds:` (io/dds/dds_config.hpp)
+  JointParams joint;  // section `joint:` (J-ftf, J-full, Q-full); its quadric part is `quadric:`
+  /// Section `pipeline:`: method and window; its frontend and joint parts are those sections.
+  PipelineParams pipeline;
 };
 
 /// Loads a parameter file; absent keys keep their defaults. Throws InputError naming the file,

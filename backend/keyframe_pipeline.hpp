@@ -1,0 +1,112 @@
+// The full system (architecture.md "Data flow"): the front end tracks every frame with ICP-ftf
+// and picks keyframes; at each new keyframe J-ftf refines it against the previous keyframe
+// (initialised by ICP-ftf and Quad IT); every `window` keyframes J-full refines the window; the
+// other frames are re-anchored to their refined keyframes. The same loop runs the paper's single
+// methods for comparisons, with every frame a keyframe:
+//
+//   icp-ftf   the front end alone (ICP frame to frame)
+//   j-ftf     J-ftf on every consecutive pair, chained
+//   j-full    J-full on windows of `window` consecutive frames, chained at shared end frames
+//   q-full    the same with the quadrics of each window's first frame fixed (Q-full)
+//   pipeline  keyframes from the front end's policy, J-ftf per keyframe pair, J-full per window
+//
+//   KeyframePipeline pipeline(params);
+//   for (...) pipeline.add(frame);
+//   pipeline.finish();
+//   Trajectory refined = pipeline.trajectory();
+//
+// Poses are camera-to-world (T_wc, method.md §1); the first frame's pose is the gauge.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "jpcr/backend/refiner.hpp"
+#include "jpcr/frontend/keyframe_tracker.hpp"
+
+namespace jpcr {
+
+enum class PipelineMethod { kIcpFtf, kJointFtf, kJointFull, kFixedQuadrics, kPipeline };
+
+/// "icp-ftf", "j-ftf", "j-full", "q-full", "pipeline".
+const char* to_string(PipelineMethod method);
+/// Throws InputError listing the choices on an unknown name.
+PipelineMethod parse_pipeline_method(const std::string& name);
+
+struct PipelineParams {
+  PipelineMethod method = PipelineMethod::kPipeline;
+  int window = 5;  // keyframes per J-full / Q-full window (M, the reference included), 2 … 16
+  FrontendParams frontend;
+  JointParams joint;
+
+  void validate() const;  // throws InputError "field: problem"
+};
+
+/// One tracked frame.
+struct PipelineFrame {
+  int index = 0;
+  StampedPose front_end;  // the front end's T_wc (trajectory() gives the refined one)
+  int keyframe = 0;       // index into keyframes(): the keyframe the frame hangs on
+  IcpVerdict icp_verdict = IcpVerdict::ok;  // ok for the first frame
+  bool kept_last_motion = false;            // the front end extrapolated (alignment failed)
+  double track_ms = 0.0;
+};
+
+/// One keyframe with what the back end did to it.
+struct PipelineKeyframe {
+  int frame = 0;          // index of its frame
+  StampedPose front_end;  // the front end's T_wc
+  StampedPose refined;    // T_wc after J-ftf / J-full
+  /// J-ftf against the previous keyframe (absent for the first keyframe and without J-ftf).
+  std::optional<RefinementReport> pair;
+  /// J-full / Q-full of the window this keyframe is the last frame of.
+  std::optional<RefinementReport> window;
+  bool used_front_end = false;  // a refinement failed here, so the front end's motion was kept
+  double refine_ms = 0.0;
+};
+
+/// Receives each keyframe's refined quadrics (curvature map) once no later step changes them:
+/// the keyframe index (into keyframes()) and its frame, for writers.
+using CurvatureSink =
+    std::function<void(int keyframe, const Frame& frame, const QuadricMap& quadrics)>;
+
+class KeyframePipeline {
+ public:
+  explicit KeyframePipeline(const PipelineParams& params = {}, CurvatureSink sink = {});
+  ~KeyframePipeline();
+  KeyframePipeline(const KeyframePipeline&) = delete;
+  KeyframePipeline& operator=(const KeyframePipeline&) = delete;
+
+  /// Tracks the next frame and refines when a keyframe completes a pair or a window. Throws
+  /// InputError when the frame's size differs from the first frame's.
+  const PipelineFrame& add(const Frame& frame);
+  /// Refines what is left (the last partial window); call once after the last frame.
+  void finish();
+
+  /// The refined camera-to-world pose of every frame.
+  Trajectory trajectory() const;
+  Trajectory front_end_trajectory() const;
+  const std::vector<PipelineFrame>& frames() const { return frames_; }
+  const std::vector<PipelineKeyframe>& keyframes() const { return keyframes_; }
+  const PipelineParams& params() const { return params_; }
+
+ private:
+  struct Window;
+  void on_keyframe(const Frame& frame, const TrackResult& track);
+  void refine_pair();
+  void refine_window();
+  void emit_curvature(std::size_t slot, const QuadricMap& quadrics);
+
+  PipelineParams params_;
+  CurvatureSink sink_;
+  KeyframeTracker tracker_;
+  std::unique_ptr<Refiner> pair_refiner_, window_refiner_;
+  std::unique_ptr<Window> window_;
+  std::vector<PipelineFrame> frames_;
+  std::vector<PipelineKeyframe> keyframes_;
+};
+
+}  // namespace jpcr

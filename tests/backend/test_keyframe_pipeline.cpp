@@ -1,0 +1,121 @@
+// The pipeline that ties the front end to the back end: ICP-ftf alone reproduces the tracker,
+// J-ftf chained over consecutive frames beats it on a noise-free synthetic walk, J-full windows
+// refine and chain at their shared frames, the gauge stays, every keyframe gets a curvature map,
+// and bad input is refused.
+#include <gtest/gtest.h>
+
+#include "jpcr/backend/keyframe_pipeline.hpp"
+#include "jpcr/io/synthetic_sequence.hpp"
+#include "jpcr/io/trajectory_metrics.hpp"
+#include "jpcr/quadric/error.hpp"
+
+namespace jpcr {
+namespace {
+
+SyntheticSequence walk(int frames) {
+  SyntheticSequenceOptions o;
+  o.scene = "room_spheres";
+  o.frames = frames;
+  o.width = 160;
+  o.height = 120;
+  o.seed = 4;
+  return make_synthetic_sequence(o);
+}
+
+struct PipelineRun {
+  Trajectory trajectory;
+  std::vector<PipelineKeyframe> keyframes;
+  std::vector<int> curvature_keyframes;
+};
+
+PipelineRun run_pipeline(const SyntheticSequence& seq, PipelineMethod method, int window = 3) {
+  PipelineParams p;
+  p.method = method;
+  p.window = window;
+  p.frontend.threads = 2;
+  PipelineRun r;
+  KeyframePipeline pipeline(p, [&](int k, const Frame&, const QuadricMap& q) {
+    EXPECT_GT(q.valid_count(), q.status.size() / 2);
+    r.curvature_keyframes.push_back(k);
+  });
+  for (std::size_t i = 0; i < seq.size(); ++i)
+    pipeline.add(seq.load(i));
+  pipeline.finish();
+  r.trajectory = pipeline.trajectory();
+  r.keyframes = pipeline.keyframes();
+  return r;
+}
+
+// The pose of frame 0 is the gauge: identity, as the tracker starts it.
+void expect_gauge(const PipelineRun& r) {
+  EXPECT_TRUE(r.trajectory.front().pose.isApprox(Eigen::Isometry3d::Identity(), 1e-12));
+}
+
+Trajectory relative_to_first(const Trajectory& t) {
+  Trajectory out = t;
+  for (StampedPose& p : out)
+    p.pose = t.front().pose.inverse() * p.pose;
+  return out;
+}
+
+TEST(KeyframePipeline, IcpFtfIsTheFrontEndAlone) {
+  const SyntheticSequence seq = walk(4);
+  const PipelineRun r = run_pipeline(seq, PipelineMethod::kIcpFtf);
+  ASSERT_EQ(r.trajectory.size(), 4u);
+  expect_gauge(r);
+  EXPECT_TRUE(r.curvature_keyframes.empty());
+  for (const PipelineKeyframe& k : r.keyframes) {
+    EXPECT_FALSE(k.pair.has_value());
+    EXPECT_TRUE(k.refined.pose.isApprox(k.front_end.pose, 1e-12));
+  }
+}
+
+TEST(KeyframePipeline, JointFtfBeatsIcpFtfOnANoiseFreeWalk) {
+  const SyntheticSequence seq = walk(4);
+  const Trajectory gt = relative_to_first(seq.ground_truth_trajectory());
+  const PipelineRun icp = run_pipeline(seq, PipelineMethod::kIcpFtf);
+  const PipelineRun ftf = run_pipeline(seq, PipelineMethod::kJointFtf);
+  expect_gauge(ftf);
+  for (std::size_t k = 1; k < ftf.keyframes.size(); ++k) {
+    ASSERT_TRUE(ftf.keyframes[k].pair.has_value());
+    EXPECT_TRUE(ftf.keyframes[k].pair->converged()) << to_string(ftf.keyframes[k].pair->verdict);
+  }
+  const RelativeErrors e_icp = compute_relative_errors(gt, icp.trajectory);
+  const RelativeErrors e_ftf = compute_relative_errors(gt, ftf.trajectory);
+  EXPECT_LT(e_ftf.translation_rms, e_icp.translation_rms);
+  EXPECT_LT(e_ftf.rotation_rms, e_icp.rotation_rms);
+  // Every keyframe has a curvature map, each exactly once, in order.
+  EXPECT_EQ(ftf.curvature_keyframes, (std::vector<int>{0, 1, 2, 3}));
+}
+
+TEST(KeyframePipeline, JointFullWindowsChainAtTheirSharedFrames) {
+  const SyntheticSequence seq = walk(5);
+  const Trajectory gt = relative_to_first(seq.ground_truth_trajectory());
+  const PipelineRun icp = run_pipeline(seq, PipelineMethod::kIcpFtf);
+  const PipelineRun full =
+      run_pipeline(seq, PipelineMethod::kJointFull, 3);  // windows {0,1,2} and {2,3,4}
+  expect_gauge(full);
+  ASSERT_EQ(full.keyframes.size(), 5u);
+  EXPECT_TRUE(full.keyframes[2].window.has_value());
+  EXPECT_TRUE(full.keyframes[4].window.has_value());
+  EXPECT_FALSE(full.keyframes[3].window.has_value());
+  EXPECT_LT(compute_relative_errors(gt, full.trajectory).translation_rms,
+            compute_relative_errors(gt, icp.trajectory).translation_rms);
+  EXPECT_EQ(full.curvature_keyframes, (std::vector<int>{0, 1, 2, 3, 4}));
+}
+
+TEST(KeyframePipeline, RefusesBadInput) {
+  PipelineParams p;
+  p.window = 1;
+  EXPECT_THROW(KeyframePipeline{p}, InputError);
+  EXPECT_THROW(parse_pipeline_method("bundle"), InputError);
+  KeyframePipeline pipeline;
+  const SyntheticSequence seq = walk(1);
+  pipeline.add(seq.load(0));
+  Frame small = seq.load(0);
+  small.depth = DepthImage(80, 60, 1.0f);
+  EXPECT_THROW(pipeline.add(small), InputError);
+}
+
+}  // namespace
+}  // namespace jpcr

@@ -1,0 +1,118 @@
+#include "jpcr_run/run_report.hpp"
+
+#include <cstdio>
+
+#include "jpcr/io/json_writer.hpp"
+#include "jpcr/quadric/error.hpp"
+
+namespace jpcr::run {
+
+namespace {
+
+void write_refinement(JsonWriter& json, const char* name,
+                      const std::optional<RefinementReport>& r) {
+  json.key(name);
+  if (!r) {
+    json.null();
+    return;
+  }
+  json.begin_object()
+      .field("method", r->method)
+      .field("verdict", to_string(r->verdict))
+      .field("iterations", r->iterations)
+      .field("rejected_steps", r->rejected_steps)
+      .field("cost", r->cost)
+      .field("active_quadrics", r->active_quadrics)
+      .field("residual_variance", r->residual_variance)
+      .field("degeneracy", r->degeneracy)
+      .end_object();
+}
+
+void write_errors(JsonWriter& json, const char* name, const std::optional<TrajectoryErrors>& e) {
+  json.key(name);
+  if (!e) {
+    json.null();
+    return;
+  }
+  json.begin_object()
+      .field("ate_rmse_m", e->ate.translation.rmse)
+      .field("rpe_frame_translation_rmse_m", e->rpe.translation.rmse)
+      .field("rpe_frame_rotation_rmse_deg", e->rpe.rotation.rmse)
+      .field("relative_translation_rms_m", e->relative.translation_rms)
+      .field("relative_rotation_rms_rad", e->relative.rotation_rms)
+      .end_object();
+}
+
+}  // namespace
+
+std::optional<TrajectoryErrors> evaluate(const Trajectory& gt, const Trajectory& est) {
+  if (gt.size() < 2 || est.size() < 2) return std::nullopt;
+  try {
+    return TrajectoryErrors{compute_ate(gt, est), compute_rpe(gt, est, 1.0, DeltaUnit::kFrames),
+                            compute_relative_errors(gt, est)};
+  } catch (const InputError&) {
+    return std::nullopt;  // e.g. no timestamps in common
+  }
+}
+
+void write_report(std::ostream& out, const std::string& dataset, const KeyframePipeline& p,
+                  const std::optional<TrajectoryErrors>& front_end,
+                  const std::optional<TrajectoryErrors>& refined, double seconds) {
+  JsonWriter json(out);
+  json.begin_object()
+      .field("dataset", dataset)
+      .field("method", to_string(p.params().method))
+      .field("window", p.params().window)
+      .field("frames", p.frames().size())
+      .field("keyframes", p.keyframes().size())
+      .field("seconds", seconds);
+  write_errors(json, "front_end_errors", front_end);
+  write_errors(json, "errors", refined);
+  std::size_t failed_tracking = 0, failed_refinement = 0;
+  for (const PipelineFrame& f : p.frames())
+    failed_tracking += f.kept_last_motion ? 1 : 0;
+  for (const PipelineKeyframe& k : p.keyframes())
+    failed_refinement += k.used_front_end ? 1 : 0;
+  json.field("frames_with_failed_tracking", failed_tracking)
+      .field("keyframes_with_failed_refinement", failed_refinement);
+  json.key("frame_records").begin_array();
+  for (const PipelineFrame& f : p.frames()) {
+    json.begin_object()
+        .field("index", f.index)
+        .field("stamp", f.front_end.timestamp)
+        .field("keyframe", f.keyframe)
+        .field("icp_verdict", to_string(f.icp_verdict))
+        .field("kept_last_motion", f.kept_last_motion)
+        .field("track_ms", f.track_ms)
+        .end_object();
+  }
+  json.end_array();
+  json.key("keyframe_records").begin_array();
+  for (const PipelineKeyframe& k : p.keyframes()) {
+    json.begin_object().field("frame", k.frame).field("stamp", k.refined.timestamp);
+    write_refinement(json, "pair", k.pair);
+    write_refinement(json, "window", k.window);
+    json.field("used_front_end", k.used_front_end).field("refine_ms", k.refine_ms).end_object();
+  }
+  json.end_array().end_object();
+  out << '\n';
+}
+
+void print_error_table(std::ostream& out, const std::string& method,
+                       const std::optional<TrajectoryErrors>& front_end,
+                       const std::optional<TrajectoryErrors>& refined) {
+  char line[256];
+  std::snprintf(line, sizeof line, "%-10s %11s %13s %15s %15s %15s\n", "method", "ATE m",
+                "RPE m/frame", "RPE deg/frame", "rel. transl. m", "rel. rot. rad");
+  out << line;
+  auto row = [&](const std::string& name, const TrajectoryErrors& e) {
+    std::snprintf(line, sizeof line, "%-10s %11.6f %13.6f %15.5f %15.3e %15.3e\n", name.c_str(),
+                  e.ate.translation.rmse, e.rpe.translation.rmse, e.rpe.rotation.rmse,
+                  e.relative.translation_rms, e.relative.rotation_rms);
+    out << line;
+  };
+  if (front_end) row("icp-ftf", *front_end);
+  if (refined && method != "icp-ftf") row(method, *refined);
+}
+
+}  // namespace jpcr::run

@@ -1,0 +1,33 @@
+// What jpcr_run writes besides the curvature maps: the JSON report (per-frame front-end
+// verdicts, per-keyframe refinement reports, timings) and, with ground truth, the error table.
+#pragma once
+
+#include <optional>
+#include <ostream>
+#include <string>
+
+#include "jpcr/backend/keyframe_pipeline.hpp"
+#include "jpcr/io/trajectory_metrics.hpp"
+
+namespace jpcr::run {
+
+/// Errors of one trajectory against ground truth.
+struct TrajectoryErrors {
+  AteResult ate;
+  RpeResult rpe;            // per frame
+  RelativeErrors relative;  // the paper's tables
+};
+
+std::optional<TrajectoryErrors> evaluate(const Trajectory& ground_truth,
+                                         const Trajectory& estimate);
+
+void write_report(std::ostream& out, const std::string& dataset, const KeyframePipeline& pipeline,
+                  const std::optional<TrajectoryErrors>& front_end,
+                  const std::optional<TrajectoryErrors>& refined, double seconds);
+
+/// "method  ATE m  RPE m/frame  RPE deg/frame  rel. transl. m  rel. rot. rad" rows.
+void print_error_table(std::ostream& out, const std::string& method,
+                       const std::optional<TrajectoryErrors>& front_end,
+                       const std::optional<TrajectoryErrors>& refined);
+
+}  // namespace jpcr::run
