@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# jpcr_run end to end on a small synthetic sequence: every output written (trajectory, front
+# end, keyframes, a curvature map per keyframe, report), the refined trajectory evaluates against
+# ground truth, and bad input gives one clear message and the documented exit code.
+set -uo pipefail
+build=$1 src=$2
+synth=$build/tools/jpcr_synth
+run=$build/tools/jpcr_run
+eval_bin=$build/tools/jpcr_eval
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+# shellcheck source=expect.sh
+source "$src/tests/tools/expect.sh"
+
+expect 0 "wrote 4 frames" -- "$synth" --scene room_spheres --frames 4 --size 160x120 --seed 4 \
+  --out "$tmp/seq"
+expect 0 "j-ftf " -- "$run" --dataset "$tmp/seq" --method j-ftf --out "$tmp/ftf"
+for f in trajectory.txt front_end.txt keyframes.txt report.json; do
+  [ -s "$tmp/ftf/$f" ] || { echo "FAIL: $f missing"; fail=1; }
+done
+n=$(ls "$tmp/ftf/curvature" | wc -l)
+[ "$n" = 4 ] || { echo "FAIL: $n curvature maps, want 4 (one per keyframe)"; fail=1; }
+expect 0 "ATE" -- "$eval_bin" traj --gt "$tmp/seq/groundtruth.txt" --est "$tmp/ftf/trajectory.txt"
+if /usr/bin/python3 -c 'import numpy' 2>/dev/null; then
+  /usr/bin/python3 - "$tmp" <<'PY' || fail=1
+import json, sys
+r = json.load(open(sys.argv[1] + "/ftf/report.json"))
+assert r["method"] == "j-ftf" and r["frames"] == 4 and r["keyframes"] == 4, r
+pairs = [k["pair"] for k in r["keyframe_records"][1:]]
+assert all(p is not None and p["verdict"] == "converged" for p in pairs), pairs
+assert r["errors"]["relative_translation_rms_m"] < r["front_end_errors"]["relative_translation_rms_m"]
+PY
+fi
+expect 0 "icp-ftf" -- "$run" --dataset "$tmp/seq" --method icp-ftf --out "$tmp/icp"
+n=$(ls "$tmp/icp/curvature" | wc -l)
+[ "$n" = 0 ] || { echo "FAIL: icp-ftf wrote $n curvature maps"; fail=1; }
+
+# Bad input.
+expect 2 "--method: unknown method 'bundle'" -- "$run" --dataset "$tmp/seq" --method bundle --out "$tmp/x"
+expect 2 "--window must be in" -- "$run" --dataset "$tmp/seq" --window 1 --out "$tmp/x"
+expect 1 "error: .*nowhere" -- "$run" --dataset "$tmp/nowhere" --out "$tmp/x"
+printf 'pipeline:\n  window: 99\n' > "$tmp/bad.yaml"
+expect 1 "window" -- "$run" --dataset "$tmp/seq" --params "$tmp/bad.yaml" --out "$tmp/x"
+expect 0 "J-full" -- "$run" --help
+exit $fail
