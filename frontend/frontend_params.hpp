@@ -56,8 +56,10 @@ struct IcpParams {
   /// directions (a plane) from drifting.
   double damping = 1e-6;
   // Verdicts (IcpVerdict).
-  int min_inliers = 1000;  // pairs at the finest level used; coarser levels need 1/4 per level
-  double min_inlier_ratio = 0.25;      // inliers / valid source points, else `diverged`
+  /// Pairs needed at the coarsest level that runs (160x120 for a 640x480 frame); finer levels
+  /// need proportionally more, by the number of pixels they sample. Fewer: `too_few_points`.
+  int min_inliers = 1000;
+  double min_inlier_ratio = 0.25;      // final pairs / valid source points, else `too_few_points`
   double degeneracy_threshold = 1e-3;  // λmin/λmax of the unit-free JᵀWJ below this: degenerate
   double max_translation = 0.3;  // m, a larger motion away from the initial guess is `diverged`
   double max_rotation = 30.0;    // deg, likewise

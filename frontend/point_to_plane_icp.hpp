@@ -34,7 +34,8 @@ struct IcpResult {
   double rms = 0.0;           // m, RMS point-to-plane residual of the final pairs
   double inlier_ratio = 0.0;  // final pairs / valid source points considered
   std::size_t inliers = 0;    // final pairs
-  /// Eigenvalues of JᵀWJ at the final linearisation, ascending (ξ = (v, ω): m⁰ and m² blocks).
+  /// Eigenvalues of JᵀWJ at the final linearisation, ascending; raw, so they scale with the
+  /// weights and with m² in the ω block (ξ = (v, ω)).
   Vector6d eigenvalues = Vector6d::Zero();
   /// λmin / λmax of JᵀWJ made unit-free: the ω columns are divided by the RMS lever arm
   /// √(Σ w |p × n|² / Σ w). 1 is perfectly conditioned, 0 unobservable.

@@ -1,8 +1,6 @@
 // jpcr_odometry: the front end on a dataset. Dense point-to-plane ICP (ICP-ftf, the paper's
 // baseline) frame to frame or frame to keyframe; writes the TUM trajectory and a JSON summary
 // with every frame's verdict, timings and the keyframes.
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -12,6 +10,7 @@
 #include <optional>
 
 #include "cli/arguments.hpp"
+#include "cli/progress.hpp"
 #include "jpcr/frontend/keyframe_tracker.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/camera_yaml.hpp"
@@ -26,27 +25,6 @@ namespace jpcr {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// A progress line: rewritten in place on a terminal, every 10 % otherwise (logs stay short).
-class Progress {
- public:
-  explicit Progress(Clock::time_point start) : start_(start), terminal_(isatty(2) != 0) {}
-
-  void operator()(std::size_t done, std::size_t total, std::size_t failed, std::size_t keyframes) {
-    const bool tenth = done * 10 / total != (done - 1) * 10 / total;
-    if (!terminal_ && !tenth && done != total) return;
-    const double seconds = std::chrono::duration<double>(Clock::now() - start_).count();
-    std::fprintf(stderr,
-                 "%sjpcr_odometry: frame %zu/%zu  %.1f s  %.1f frames/s  %zu keyframes  %zu "
-                 "failed%s",
-                 terminal_ ? "\r" : "", done, total, seconds, done / std::max(seconds, 1e-9),
-                 keyframes, failed, terminal_ && done != total ? "" : "\n");
-  }
-
- private:
-  Clock::time_point start_;
-  bool terminal_;
-};
 
 struct Run {
   std::string dataset, description, mode;
@@ -168,7 +146,7 @@ int run(int argc, char** argv) {
     std::cerr << "jpcr_odometry: " << run.description << ", " << run.mode << ", " << run.threads
               << " threads\n";
     const Clock::time_point start = Clock::now();
-    Progress progress(start);
+    cli::Progress progress("jpcr_odometry", start);
     Trajectory trajectory;
     std::size_t failed = 0;
     for (std::size_t i = 0; i < frames; ++i) {
@@ -182,7 +160,9 @@ int run(int argc, char** argv) {
       failed += r.kept_last_motion ? 1 : 0;
       trajectory.push_back(r.T_wc);
       run.frames.push_back(r);
-      progress(i + 1, frames, failed, tracker.keyframe_indices().size());
+      progress(i + 1, frames,
+               std::to_string(tracker.keyframe_indices().size()) + " keyframes  " +
+                   std::to_string(failed) + " failed");
     }
     run.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     run.keyframes = tracker.keyframe_indices();
