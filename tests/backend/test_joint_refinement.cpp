@@ -28,6 +28,9 @@ void print_report(const RefinementReport& r) {
   std::printf("\n");
 }
 
+// Noise-free 320x240 pair, T₂ 2 cm / 2° off: measured 0.016 mm / 0.0008° after 6 steps (the
+// residual error is the quadric model's ρ⁴ bias on the balls, not noise); the bound is
+// 0.2 mm / 0.01°.
 TEST(JointFrameToFrame, ConvergesFromTwoCentimetresAndTwoDegrees) {
   const JointTestWindow w = render_window(2, 320);
   const JointFrameToFrame jftf;
@@ -56,7 +59,9 @@ double rms_curvature_error(const QuadricMap& map, const CurvatureImage& truth,
 }
 
 // Under range noise of 1 % (n₀ and the gate scaled with the range as in Quad IT's noise test),
-// the second frame's independent samples lower the curvature error of frame 1.
+// the second frame's independent samples lower the curvature error of frame 1: measured RMS
+// over the pixels valid in both maps, Quad IT 3.61 → J-ftf 3.24 1/m (the pose ends 1.4 mm /
+// 0.035° off; σ is 2–4 cm at these ranges).
 TEST(JointFrameToFrame, LowersTheCurvatureErrorOfQuadItUnderRangeNoise) {
   const JointTestWindow w = render_window(2, 320, "range:1");
   JointParams params;
@@ -76,7 +81,9 @@ TEST(JointFrameToFrame, LowersTheCurvatureErrorOfQuadItUnderRangeNoise) {
   EXPECT_LT(after, before);
 }
 
-// J-full and Q-full on five frames, each pose perturbed by 2 cm / 2° (alternating directions).
+// J-full and Q-full on five noise-free 160x120 frames, each pose perturbed by 2 cm / 2°
+// (alternating directions). Measured worst pose error: J-full 0.055 mm / 0.002°, Q-full (the
+// quadrics keep Quad IT's bias) 0.10 mm / 0.0034°; the bounds leave a factor of about 10.
 class WindowRefinement : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(WindowRefinement, ConvergesFromPerturbedPosesAndKeepsTheGauge) {
