@@ -81,12 +81,15 @@ struct FrameTerms {
   int count = 0;                      // samples inside the gate
 };
 
-/// w and the cost share of one sample at distance² d2 from p̄ (the gate of the file comment).
+/// The cost share of one sample at distance² d2 from p̄ (the gate of the file comment), and its
+/// weight w = fair_weight(r, d2, n₀), meaningful when inside.
 template <typename Scalar>
-JPCR_HD Scalar gated_cost(Scalar r, Scalar d2, const SampleGate<Scalar>& limits, bool& inside) {
+JPCR_HD Scalar gated_cost(Scalar r, Scalar d2, const SampleGate<Scalar>& limits, bool& inside,
+                          Scalar& w) {
   inside = r <= limits.gate && r >= -limits.gate;
   const Scalar e = inside ? r : limits.gate;
-  return fair_weight(e, d2, limits.n0) * e * e;
+  w = fair_weight(e, d2, limits.n0);
+  return w * e * e;
 }
 
 /// Adds the samples of `pattern` around (u, v) of `view`, mapped by T into frame 1, to the
@@ -104,11 +107,11 @@ JPCR_HD void accumulate_frame_terms(const QuadricT<Scalar>& q, const VertexView&
     if (!is_finite_value(Qf.z())) continue;
     const Vector3 X = T.apply(Qf.template cast<Scalar>());
     const QuadricLinearization<Scalar> l = linearize_quadric(q, X);
-    const Scalar d2 = (X - q.center).squaredNorm();
+    const Scalar d2 = l.v.squaredNorm();  // |X − p̄|², R orthonormal
     bool inside = false;
-    out.cost += gated_cost(l.r, d2, limits, inside);
+    Scalar w = 0;
+    out.cost += gated_cost(l.r, d2, limits, inside, w);
     if (!inside) continue;
-    const Scalar w = fair_weight(l.r, d2, limits.n0);
     // Rank-1 updates of whole 6x6 blocks (Eigen vectorises them; C and A are read as their
     // lower triangles).
     const Eigen::Matrix<Scalar, 6, 1> wJ = w * l.J;
@@ -140,7 +143,8 @@ JPCR_HD Scalar frame_cost(const QuadricT<Scalar>& q, const VertexView& view,
     if (!is_finite_value(Qf.z())) continue;
     const Eigen::Matrix<Scalar, 3, 1> X = T.apply(Qf.template cast<Scalar>());
     bool inside = false;
-    cost += gated_cost(quadric_residual(q, X), (X - q.center).squaredNorm(), limits, inside);
+    Scalar w = 0;
+    cost += gated_cost(quadric_residual(q, X), (X - q.center).squaredNorm(), limits, inside, w);
     count += inside ? 1 : 0;
   }
   return cost;
