@@ -195,11 +195,10 @@ struct JointPixelSystem {
   static constexpr int kPoses = MaxFrames - 1;  // T_2 … T_M
 
   Matrix6 L;             // Cholesky factor of the damped C_p (lower)
-  Vector6 C_diagonal;    // diag C_p, undamped (the LM damping of the full system)
   Vector6 k;             // C_p⁻¹ b_p
   Matrix6 B[kPoses];     // B_jp
   Matrix6 K[kPoses];     // C_p⁻¹ B_jpᵀ
-  Matrix6 A[kPoses];     // A_jp, lower triangle
+  Matrix6 A[kPoses];     // A_jp (symmetric; the lower triangle is read)
   Vector6 g_xi[kPoses];  // −a_jp
   Vector6 g_gamma;       // −b_p
   bool seen[kPoses];     // frame j+2 sees the quadric
@@ -255,10 +254,8 @@ JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowV
   if (p.estimate_quadrics) {
     // LM on the full system: C_p + λ diag C_p; the pivot test is relative to each diagonal entry.
     sys.L = C;
-    for (int i = 0; i < 6; ++i) {
-      sys.C_diagonal(i) = C(i, i);
+    for (int i = 0; i < 6; ++i)
       sys.L(i, i) *= Scalar(1) + lambda;
-    }
     const Eigen::Matrix<Scalar, 6, 1> damped_diagonal = sys.L.diagonal();
     if (!cholesky_factor<Scalar, 6>(sys.L, Scalar(0))) return;
     for (int i = 0; i < 6; ++i)
