@@ -139,6 +139,24 @@ TEST(Refiner, RejectsMismatchedInput) {
   EXPECT_THROW(jftf.refine(frames, w.truth), std::invalid_argument);
 }
 
+// One step from 2 cm / 2° cannot meet the 10 µm tolerance: the report says max_iterations, with
+// the cost before and after that step, and the pose has moved toward the truth.
+TEST(Refiner, ReportsMaxIterations) {
+  const JointTestWindow w = render_window(2, 160);
+  JointParams params;
+  params.max_iterations = 1;
+  const JointFrameToFrame jftf(params);
+  const QuadricMap initial = QuadricFit().estimate(w.vertices[0]);
+  const std::vector<Eigen::Isometry3d> start = {w.truth[0], perturbed(w.truth[1], 0.02, 2.0)};
+  const RefinementResult r = jftf.refine(w.vertices, w.camera, start, initial);
+  print_report(r.report);
+  EXPECT_EQ(r.report.verdict, RefinementVerdict::kMaxIterations);
+  EXPECT_EQ(r.report.iterations, 1);
+  EXPECT_EQ(r.report.cost.size(), 2u);
+  EXPECT_LT(pose_error(r.poses[1], w.truth[1]).translation,
+            pose_error(start[1], w.truth[1]).translation);
+}
+
 // Frame 2 looks the other way: no quadric is seen twice, and the result says so.
 TEST(Refiner, NoOverlapIsNotConverged) {
   const SyntheticScene scene = load_scene("room_spheres");
