@@ -81,12 +81,15 @@ struct FrameTerms {
   int count = 0;                      // samples inside the gate
 };
 
-/// w and the cost share of one sample at distance² d2 from p̄ (the gate of the file comment).
+/// The cost share of one sample at distance² d2 from p̄ (the gate of the file comment), and its
+/// weight w = fair_weight(r, d2, n₀), meaningful when inside.
 template <typename Scalar>
-JPCR_HD Scalar gated_cost(Scalar r, Scalar d2, const SampleGate<Scalar>& limits, bool& inside) {
+JPCR_HD Scalar gated_cost(Scalar r, Scalar d2, const SampleGate<Scalar>& limits, bool& inside,
+                          Scalar& w) {
   inside = r <= limits.gate && r >= -limits.gate;
   const Scalar e = inside ? r : limits.gate;
-  return fair_weight(e, d2, limits.n0) * e * e;
+  w = fair_weight(e, d2, limits.n0);
+  return w * e * e;
 }
 
 /// Adds the samples of `pattern` around (u, v) of `view`, mapped by T into frame 1, to the
@@ -104,11 +107,11 @@ JPCR_HD void accumulate_frame_terms(const QuadricT<Scalar>& q, const VertexView&
     if (!is_finite_value(Qf.z())) continue;
     const Vector3 X = T.apply(Qf.template cast<Scalar>());
     const QuadricLinearization<Scalar> l = linearize_quadric(q, X);
-    const Scalar d2 = (X - q.center).squaredNorm();
+    const Scalar d2 = l.v.squaredNorm();  // |X − p̄|², R orthonormal
     bool inside = false;
-    out.cost += gated_cost(l.r, d2, limits, inside);
+    Scalar w = 0;
+    out.cost += gated_cost(l.r, d2, limits, inside, w);
     if (!inside) continue;
-    const Scalar w = fair_weight(l.r, d2, limits.n0);
     // Rank-1 updates of whole 6x6 blocks (Eigen vectorises them; C and A are read as their
     // lower triangles).
     const Eigen::Matrix<Scalar, 6, 1> wJ = w * l.J;
@@ -140,7 +143,8 @@ JPCR_HD Scalar frame_cost(const QuadricT<Scalar>& q, const VertexView& view,
     if (!is_finite_value(Qf.z())) continue;
     const Eigen::Matrix<Scalar, 3, 1> X = T.apply(Qf.template cast<Scalar>());
     bool inside = false;
-    cost += gated_cost(quadric_residual(q, X), (X - q.center).squaredNorm(), limits, inside);
+    Scalar w = 0;
+    cost += gated_cost(quadric_residual(q, X), (X - q.center).squaredNorm(), limits, inside, w);
     count += inside ? 1 : 0;
   }
   return cost;
@@ -191,11 +195,10 @@ struct JointPixelSystem {
   static constexpr int kPoses = MaxFrames - 1;  // T_2 … T_M
 
   Matrix6 L;             // Cholesky factor of the damped C_p (lower)
-  Vector6 C_diagonal;    // diag C_p, undamped (the LM damping of the full system)
   Vector6 k;             // C_p⁻¹ b_p
   Matrix6 B[kPoses];     // B_jp
   Matrix6 K[kPoses];     // C_p⁻¹ B_jpᵀ
-  Matrix6 A[kPoses];     // A_jp, lower triangle
+  Matrix6 A[kPoses];     // A_jp (symmetric; the lower triangle is read)
   Vector6 g_xi[kPoses];  // −a_jp
   Vector6 g_gamma;       // −b_p
   bool seen[kPoses];     // frame j+2 sees the quadric
@@ -251,10 +254,8 @@ JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowV
   if (p.estimate_quadrics) {
     // LM on the full system: C_p + λ diag C_p; the pivot test is relative to each diagonal entry.
     sys.L = C;
-    for (int i = 0; i < 6; ++i) {
-      sys.C_diagonal(i) = C(i, i);
+    for (int i = 0; i < 6; ++i)
       sys.L(i, i) *= Scalar(1) + lambda;
-    }
     const Eigen::Matrix<Scalar, 6, 1> damped_diagonal = sys.L.diagonal();
     if (!cholesky_factor<Scalar, 6>(sys.L, Scalar(0))) return;
     for (int i = 0; i < 6; ++i)

@@ -26,6 +26,7 @@ struct ReductionShare {
   std::vector<double> S, s, A_diagonal;
   std::vector<int> seen;
   std::vector<PairFactors> factors;
+  std::vector<std::size_t> fixed_active;
   double cost = 0.0;
   long terms = 0;
   int active = 0;
@@ -66,11 +67,12 @@ void linearize_row(const JointState& state, const JointWindowView<double>& windo
     for (int j = 0; j + 1 < M; ++j)
       share.seen[j] += sys.seen[j] ? 1 : 0;
     if (keep_factors) share.factors.push_back(PairFactors{i, sys.k, sys.K[0]});
+    if (!p.estimate_quadrics) share.fixed_active.push_back(i);
   }
 }
 
 // Row v, recomputing each active quadric's system: its back-substitution and its cost at the
-// candidate (windows of M > 2, and Q-full).
+// candidate (windows of M > 2).
 template <int MaxFrames>
 double step_row(const JointState& state, const JointWindowView<double>& window,
                 const JointWindowView<double>& next, const JointTermParams& p, double lambda,
@@ -124,6 +126,11 @@ JPCR_SIMD_CLONES double step_row_window(const JointState& state,
                                         JointStep& out) {
   return step_row<kMaxWindowFrames>(state, window, next, p, lambda, pose_steps, v, width, out);
 }
+JPCR_SIMD_CLONES double fixed_cost_clone(const Quadricd& q, const JointWindowView<double>& next,
+                                         const JointTermParams& p, std::size_t pixel, int width) {
+  return joint_pixel_cost(q, next, static_cast<int>(pixel % width), static_cast<int>(pixel / width),
+                          p);
+}
 JPCR_SIMD_CLONES double step_factors_clone(const PairFactors& f,
                                            const JointWindowView<double>& next,
                                            const JointTermParams& p, const Vector6d& pose_step,
@@ -174,6 +181,8 @@ ReducedSystem JointSystem::linearize(const JointState& state, double lambda) con
       total.terms += share.terms;
       total.active += share.active;
       total.factors.insert(total.factors.end(), share.factors.begin(), share.factors.end());
+      total.fixed_active.insert(total.fixed_active.end(), share.fixed_active.begin(),
+                                share.fixed_active.end());
     }
   }
   ReducedSystem out;
@@ -187,6 +196,7 @@ ReducedSystem JointSystem::linearize(const JointState& state, double lambda) con
   out.active = total.active;
   out.seen = std::move(total.seen);
   out.factors = std::move(total.factors);
+  out.fixed_active = std::move(total.fixed_active);
   return out;
 }
 
@@ -221,6 +231,24 @@ JointStep JointSystem::step_pair(const JointState& state, const ReducedSystem& s
   return out;
 }
 
+JointStep JointSystem::step_fixed(const JointState& state, const ReducedSystem& system,
+                                  const std::vector<Vector6d>& pose_steps) const {
+  JointStep out = start_step(state, pose_steps);
+  const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
+  const JointWindowView<double> next{views_.data(),   moved.data(),
+                                     frames(),        camera_,
+                                     pattern_.data(), static_cast<int>(pattern_.size())};
+  const long count = static_cast<long>(system.fixed_active.size());
+  double cost = 0.0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : cost)
+  for (long k = 0; k < count; ++k) {
+    const std::size_t i = system.fixed_active[static_cast<std::size_t>(k)];
+    cost += fixed_cost_clone(state.quadrics[i], next, params_, i, width_);
+  }
+  out.cost = cost;
+  return out;
+}
+
 JointStep JointSystem::step_window(const JointState& state, double lambda,
                                    const std::vector<Vector6d>& pose_steps) const {
   JointStep out = start_step(state, pose_steps);
@@ -242,9 +270,10 @@ JointStep JointSystem::step_window(const JointState& state, double lambda,
 
 JointStep JointSystem::step(const JointState& state, const ReducedSystem& system, double lambda,
                             const std::vector<Vector6d>& pose_steps) const {
-  // J-ftf keeps its factors; Q-full has no quadric step and M = 2 Q-full keeps none, so it
-  // recomputes (cheaply: no C_p) like the windows.
-  if (frames() == 2 && params_.estimate_quadrics) return step_pair(state, system, pose_steps);
+  // J-ftf keeps its factors, Q-full has no quadric step (only the candidate's cost), J-full
+  // recomputes each quadric's system.
+  if (!params_.estimate_quadrics) return step_fixed(state, system, pose_steps);
+  if (frames() == 2) return step_pair(state, system, pose_steps);
   return step_window(state, lambda, pose_steps);
 }
 

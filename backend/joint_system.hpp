@@ -39,11 +39,12 @@ struct ReducedSystem {
   Eigen::MatrixXd S;
   Eigen::VectorXd s;
   Eigen::VectorXd A_diagonal;
-  double cost = 0.0;                 // Σ w r² over the active quadrics
-  long terms = 0;                    // their terms inside the gate
-  int active = 0;                    // quadrics taking part
-  std::vector<int> seen;             // per pose T_2 … T_M: active quadrics that frame sees
-  std::vector<PairFactors> factors;  // M = 2: every active quadric's back-substitution factors
+  double cost = 0.0;                      // Σ w r² over the active quadrics
+  long terms = 0;                         // their terms inside the gate
+  int active = 0;                         // quadrics taking part
+  std::vector<int> seen;                  // per pose T_2 … T_M: active quadrics that frame sees
+  std::vector<PairFactors> factors;       // M = 2: every active quadric's back-substitution factors
+  std::vector<std::size_t> fixed_active;  // Q-full: the active quadrics' pixels
 };
 
 /// A proposed step and where it leads.
@@ -82,6 +83,8 @@ class JointSystem {
   ReducedSystem linearize_impl(const JointState& state, double lambda) const;
   JointStep step_pair(const JointState& state, const ReducedSystem& system,
                       const std::vector<Vector6d>& pose_steps) const;
+  JointStep step_fixed(const JointState& state, const ReducedSystem& system,
+                       const std::vector<Vector6d>& pose_steps) const;
   JointStep step_window(const JointState& state, double lambda,
                         const std::vector<Vector6d>& pose_steps) const;
   JointStep start_step(const JointState& state, const std::vector<Vector6d>& pose_steps) const;

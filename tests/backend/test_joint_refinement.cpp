@@ -28,6 +28,9 @@ void print_report(const RefinementReport& r) {
   std::printf("\n");
 }
 
+// Noise-free 320x240 pair, T₂ 2 cm / 2° off: measured 0.016 mm / 0.0008° after 6 steps (the
+// residual error is the quadric model's ρ⁴ bias on the balls, not noise); the bound is
+// 0.2 mm / 0.01°.
 TEST(JointFrameToFrame, ConvergesFromTwoCentimetresAndTwoDegrees) {
   const JointTestWindow w = render_window(2, 320);
   const JointFrameToFrame jftf;
@@ -56,7 +59,9 @@ double rms_curvature_error(const QuadricMap& map, const CurvatureImage& truth,
 }
 
 // Under range noise of 1 % (n₀ and the gate scaled with the range as in Quad IT's noise test),
-// the second frame's independent samples lower the curvature error of frame 1.
+// the second frame's independent samples lower the curvature error of frame 1: measured RMS
+// over the pixels valid in both maps, Quad IT 3.61 → J-ftf 3.24 1/m (the pose ends 1.4 mm /
+// 0.035° off; σ is 2–4 cm at these ranges).
 TEST(JointFrameToFrame, LowersTheCurvatureErrorOfQuadItUnderRangeNoise) {
   const JointTestWindow w = render_window(2, 320, "range:1");
   JointParams params;
@@ -76,7 +81,9 @@ TEST(JointFrameToFrame, LowersTheCurvatureErrorOfQuadItUnderRangeNoise) {
   EXPECT_LT(after, before);
 }
 
-// J-full and Q-full on five frames, each pose perturbed by 2 cm / 2° (alternating directions).
+// J-full and Q-full on five noise-free 160x120 frames, each pose perturbed by 2 cm / 2°
+// (alternating directions). Measured worst pose error: J-full 0.055 mm / 0.002°, Q-full (the
+// quadrics keep Quad IT's bias) 0.10 mm / 0.0034°; the bounds leave a factor of about 10.
 class WindowRefinement : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(WindowRefinement, ConvergesFromPerturbedPosesAndKeepsTheGauge) {
@@ -130,6 +137,24 @@ TEST(Refiner, RejectsMismatchedInput) {
                std::invalid_argument);  // J-ftf is two frames
   std::vector<Frame> frames = {w.frames[0].frame, small.frames[0].frame};
   EXPECT_THROW(jftf.refine(frames, w.truth), std::invalid_argument);
+}
+
+// One step from 2 cm / 2° cannot meet the 10 µm tolerance: the report says max_iterations, with
+// the cost before and after that step, and the pose has moved toward the truth.
+TEST(Refiner, ReportsMaxIterations) {
+  const JointTestWindow w = render_window(2, 160);
+  JointParams params;
+  params.max_iterations = 1;
+  const JointFrameToFrame jftf(params);
+  const QuadricMap initial = QuadricFit().estimate(w.vertices[0]);
+  const std::vector<Eigen::Isometry3d> start = {w.truth[0], perturbed(w.truth[1], 0.02, 2.0)};
+  const RefinementResult r = jftf.refine(w.vertices, w.camera, start, initial);
+  print_report(r.report);
+  EXPECT_EQ(r.report.verdict, RefinementVerdict::kMaxIterations);
+  EXPECT_EQ(r.report.iterations, 1);
+  EXPECT_EQ(r.report.cost.size(), 2u);
+  EXPECT_LT(pose_error(r.poses[1], w.truth[1]).translation,
+            pose_error(start[1], w.truth[1]).translation);
 }
 
 // Frame 2 looks the other way: no quadric is seen twice, and the result says so.
