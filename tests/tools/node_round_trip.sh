@@ -86,6 +86,8 @@ odom_echo=$!; pids+=($odom_echo)
 curv_echo=$!; pids+=($curv_echo)
 "$echo_bin" rt/jpcr/curvature_color "${dds[@]}" --count 6 --timeout 240 > "$tmp/color.txt" 2>&1 &
 color_echo=$!; pids+=($color_echo)
+"$echo_bin" rt/jpcr/keyframe_pose "${dds[@]}" --count 6 --timeout 240 > "$tmp/kf.txt" 2>&1 &
+kf_echo=$!; pids+=($kf_echo)
 sleep 1
 "$node" "${dds[@]}" --method j-ftf --max-frames 6 --idle-timeout 60 > "$tmp/node.txt" 2> "$tmp/node.err" &
 node_pid=$!; pids+=($node_pid)
@@ -101,13 +103,15 @@ fi
 n=$(grep -c "rejected sample" "$tmp/node.err")
 [ "$n" = 3 ] || { echo "FAIL: $n rejection lines, want 3"; cat "$tmp/node.err"; fail=1; }
 grep -q "jpcr_node: frame 6  keyframes 6" "$tmp/node.err" || { echo "FAIL: progress line"; cat "$tmp/node.err"; fail=1; }
-for e in $odom_echo $curv_echo $color_echo; do
+for e in $odom_echo $curv_echo $color_echo $kf_echo; do
   wait_bounded $e 30 || { echo "FAIL: an echo exited $?"; fail=1; }
 done
 kill -INT $path_echo; wait_bounded $path_echo 10
 n=$(grep -c "^odom stamp=.* frame=map child=camera_depth_optical_frame" "$tmp/odom.txt")
 [ "$n" = 6 ] || { echo "FAIL: $n of 6 odom"; cat "$tmp/odom.txt"; fail=1; }
 grep -q "cov_diag=\[0 0 0 0 0 0\]" "$tmp/odom.txt" || { echo "FAIL: first odom covariance"; cat "$tmp/odom.txt"; fail=1; }
+n=$(grep -c "^pose stamp=.* frame=map position=" "$tmp/kf.txt")
+[ "$n" = 6 ] || { echo "FAIL: $n of 6 keyframe poses"; cat "$tmp/kf.txt"; fail=1; }
 n=$(grep -c "^image .* 160x120 32FC2 .* valid=" "$tmp/curv.txt")
 [ "$n" = 6 ] || { echo "FAIL: $n of 6 curvature maps"; cat "$tmp/curv.txt"; fail=1; }
 n=$(grep -c "^image .* 160x120 rgb8 .* ok$" "$tmp/color.txt")
