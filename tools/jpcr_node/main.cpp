@@ -4,6 +4,8 @@
 // path (cli/pipeline_publisher.hpp). Stops cleanly on SIGINT/SIGTERM, after --max-frames frames,
 // or when no frame arrived for --idle-timeout seconds after the first: finishes the pipeline,
 // publishes the final path, waits for the readers' acknowledgements and exits 0.
+#include <unistd.h>
+
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -86,6 +88,7 @@ int node_main(int argc, char** argv) {
               << dds.domain_id << "), publishing " << dds.topic_prefix << "*\n";
 
     const Clock::time_point start = Clock::now();
+    const bool terminal = isatty(2) != 0;
     std::optional<Clock::time_point> last_frame;
     std::size_t processed = 0, skipped = 0;
     std::string reason = "signal";
@@ -115,11 +118,15 @@ int node_main(int argc, char** argv) {
       }
       publisher.frame_added(*runner, *f);
       ++processed;
-      std::fprintf(stderr, "jpcr_node: frame %zu  keyframes %zu  icp %s%s  rejected %zu  %.1f s\n",
-                   processed, runner->keyframes().size(), to_string(f->icp_verdict),
-                   f->kept_last_motion ? " (kept last motion)" : "", subscriber.samples_rejected(),
-                   seconds_since(start));
+      // On a terminal the line is rewritten in place; in a log: frames 1-10, then every 10th.
+      if (!terminal && processed > 10 && processed % 10 != 0) continue;
+      std::fprintf(stderr,
+                   "%sjpcr_node: frame %zu  keyframes %zu  icp %s%s  rejected %zu  %.1f s%s",
+                   terminal ? "\r" : "", processed, runner->keyframes().size(),
+                   to_string(f->icp_verdict), f->kept_last_motion ? " (kept last motion)" : "",
+                   subscriber.samples_rejected(), seconds_since(start), terminal ? "" : "\n");
     }
+    if (terminal && processed > 0) std::fputc('\n', stderr);
     if (processed > 0) {
       runner->finish();
       publisher.finished(*runner);
