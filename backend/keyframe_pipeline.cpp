@@ -96,6 +96,7 @@ const PipelineFrame& KeyframePipeline::add(const Frame& frame) {
   f.front_end = track.T_wc;
   f.icp_verdict = frames_.empty() ? IcpVerdict::ok : track.icp.verdict;
   f.kept_last_motion = track.kept_last_motion;
+  if (!frames_.empty()) f.icp_covariance = track.icp.covariance;
   f.track_ms = ms_since(t0);
   // The single methods refine every consecutive frame; the pipeline follows the front end.
   const bool keyframe =

@@ -52,6 +52,9 @@ struct PipelineFrame {
   int keyframe = 0;       // index into keyframes(): the keyframe the frame hangs on
   IcpVerdict icp_verdict = IcpVerdict::ok;  // ok for the first frame
   bool kept_last_motion = false;            // the front end extrapolated (alignment failed)
+  /// The front end's ICP covariance of the frame's alignment (IcpResult::covariance, over
+  /// x, y, z, rx, ry, rz); zero for the first frame, which is the gauge.
+  Matrix6d icp_covariance = Matrix6d::Zero();
   double track_ms = 0.0;
 };
 

@@ -70,6 +70,25 @@ TEST(KeyframePipeline, IcpFtfIsTheFrontEndAlone) {
   }
 }
 
+// Each frame carries its ICP covariance for odometry consumers; the gauge frame has none.
+TEST(KeyframePipeline, FramesCarryTheFrontEndsIcpCovariance) {
+  const SyntheticSequence seq = walk(3);
+  PipelineParams p;
+  p.method = PipelineMethod::kIcpFtf;
+  p.frontend.threads = 2;
+  KeyframePipeline pipeline(p);
+  for (std::size_t i = 0; i < seq.size(); ++i)
+    pipeline.add(seq.load(i));
+  ASSERT_EQ(pipeline.frames().size(), 3u);
+  EXPECT_TRUE(pipeline.frames()[0].icp_covariance.isZero(0.0));
+  for (std::size_t i = 1; i < 3; ++i) {
+    const Matrix6d& c = pipeline.frames()[i].icp_covariance;
+    EXPECT_TRUE(c.allFinite());
+    EXPECT_TRUE((c.diagonal().array() > 0.0).all()) << c.diagonal().transpose();
+    EXPECT_TRUE(c.isApprox(c.transpose(), 1e-9));
+  }
+}
+
 TEST(KeyframePipeline, JointFtfBeatsIcpFtfOnANoiseFreeWalk) {
   const SyntheticSequence seq = walk(4);
   const Trajectory gt = relative_to_first(seq.ground_truth_trajectory());

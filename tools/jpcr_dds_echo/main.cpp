@@ -3,11 +3,13 @@
 #include <algorithm>
 #include <chrono>
 #include <iostream>
+#include <type_traits>
 
 #include "cli/arguments.hpp"
 #include "cli/dds_options.hpp"
 #include "cli/stop_signal.hpp"
 #include "jpcr/io/dds/ros_messages.hpp"
+#include "jpcr/io/tum_lists.hpp"
 #include "jpcr_dds_echo/message_summary.hpp"
 
 namespace jpcr {
@@ -40,6 +42,7 @@ struct EchoOptions {
   DdsQos qos;
   int count = 0;         // 0: until timeout or signal
   double timeout = 0.0;  // s, 0: none
+  bool tum = false;      // paths: also every pose as TUM lines at full precision
 };
 
 template <typename Msg>
@@ -56,6 +59,9 @@ int echo(const DdsParticipant& participant, const EchoOptions& o) {
       if (o.count != 0 && received >= o.count) return;
       ++received;
       std::cout << summarize(m) << std::endl;
+      if constexpr (std::is_same_v<Msg, RosPath>) {
+        if (o.tum) std::cout << format_trajectory(trajectory_of(m)) << std::flush;
+      }
     });
   }
   if (o.count > 0 && received < o.count && !cli::stop_requested()) {
@@ -78,6 +84,7 @@ int run(int argc, char** argv) {
       .option("count", "exit after N samples (0: run until --timeout or Ctrl-C)", "0")
       .option("timeout", "seconds to listen (0: no limit); fewer than --count samples is an error",
               "0")
+      .flag("tum", "with a path: also print its poses as TUM lines (full precision)")
       .flag("best-effort", "subscribe best effort (matches sensor-data publishers too)");
   cli::add_dds_options(args);
   args.epilog(
@@ -96,6 +103,7 @@ int run(int argc, char** argv) {
     o.count = args.get_int("count");
     if (o.count < 0) throw cli::UsageError("--count must be >= 0");
     o.timeout = args.get_double("timeout");
+    o.tum = args.get_flag("tum");
     if (!(o.timeout >= 0.0)) throw cli::UsageError("--timeout must be >= 0");
     const DdsConfig dds = cli::dds_config_from(args);
     o.qos.depth = dds.history_depth;

@@ -18,6 +18,10 @@
 #include "jpcr/io/tum_lists.hpp"
 #include "jpcr/quadric/error.hpp"
 #include "jpcr_run/run_report.hpp"
+#ifdef JPCR_HAVE_DDS
+#include "cli/dds_options.hpp"
+#include "cli/pipeline_publisher.hpp"
+#endif
 
 namespace jpcr {
 
@@ -49,11 +53,18 @@ int run_main(int argc, char** argv) {
       .option("params", "parameter YAML (sections frontend, quadric, joint, pipeline)")
       .option("frames", "FIRST:LAST, 0-based, LAST excluded (default: all)")
       .required("out", "output directory (created)")
-      .flag("ply", "also write a PLY point cloud per keyframe")
-      .epilog(
-          "example:\n  jpcr_synth --scene room_spheres --frames 20 --noise range:1 --out seq\n"
-          "  jpcr_run --dataset seq --out seq_run\n"
-          "  jpcr_eval traj --gt seq/groundtruth.txt --est seq_run/trajectory.txt");
+      .flag("ply", "also write a PLY point cloud per keyframe");
+#ifdef JPCR_HAVE_DDS
+  args.flag("dds",
+            "also publish odom, keyframe_pose, curvature, curvature_color and path over DDS"
+            " (as jpcr_node does; --params' dds: section, --domain, --cyclone-uri)");
+  args.option("domain", "DDS domain id 0..232 with --dds (overrides dds.domain_id)")
+      .option("cyclone-uri", "Cyclone DDS configuration with --dds, file://PATH or XML");
+#endif
+  args.epilog(
+      "example:\n  jpcr_synth --scene room_spheres --frames 20 --noise range:1 --out seq\n"
+      "  jpcr_run --dataset seq --out seq_run\n"
+      "  jpcr_eval traj --gt seq/groundtruth.txt --est seq_run/trajectory.txt");
   return cli::run_program("jpcr_run", [&] {
     if (!args.parse(argc, argv)) return 0;
     Params params = args.has("params") ? load_params(args.get("params")) : Params{};
@@ -82,7 +93,22 @@ int run_main(int argc, char** argv) {
 
     const bool ply = args.get_flag("ply");
     std::size_t maps = 0;
-    KeyframePipeline runner(pipeline, [&](int, const Frame& frame, const QuadricMap& quadrics) {
+#ifdef JPCR_HAVE_DDS
+    std::optional<DdsParticipant> participant;
+    std::optional<cli::PipelinePublisher> dds;
+    if (args.get_flag("dds")) {
+      const DdsConfig config = cli::dds_config_from(args);
+      participant.emplace(config);
+      dds.emplace(*participant, config);
+    }
+#endif
+    const KeyframePipeline* self = nullptr;
+    KeyframePipeline runner(pipeline, [&](int k, const Frame& frame, const QuadricMap& quadrics) {
+#ifdef JPCR_HAVE_DDS
+      if (dds) dds->keyframe_final(*self, k, quadrics);
+#endif
+      (void)k;
+      (void)self;
       const std::string stamp = format_stamp(frame.timestamp);
       write_curvature_npy((out / "curvature" / (stamp + ".npy")).string(), quadrics.curvature);
       save_curvature_png((out / "curvature_png" / (stamp + ".png")).string(), quadrics.curvature);
@@ -92,15 +118,26 @@ int run_main(int argc, char** argv) {
       }
       ++maps;
     });
+    self = &runner;
     cli::Progress progress("jpcr_run");
     for (std::size_t i = range.first; i < range.last; ++i) {
       const PipelineFrame& f = runner.add(dataset->load(i));
+#ifdef JPCR_HAVE_DDS
+      if (dds) dds->frame_added(runner, f);
+#endif
       std::ostringstream extra;
       extra << "keyframes " << runner.keyframes().size() << "  icp " << to_string(f.icp_verdict)
             << (f.kept_last_motion ? " (kept last motion)" : "");
       progress(i - range.first + 1, range.last - range.first, extra.str());
     }
     runner.finish();
+#ifdef JPCR_HAVE_DDS
+    if (dds) {
+      dds->finished(runner);
+      if (!dds->flush(std::chrono::seconds(5)))
+        std::cerr << "jpcr_run: not every DDS reader acknowledged the last samples\n";
+    }
+#endif
 
     const Trajectory refined = runner.trajectory();
     write_trajectory((out / "trajectory.txt").string(), refined);

@@ -1,0 +1,152 @@
+#!/usr/bin/env bash
+# jpcr_node over real Cyclone DDS on loopback, as separate processes: jpcr_dds_play publishes a
+# 6-frame 160x120 synthetic sequence (32FC1, lossless) as fast as it can, after three malformed
+# depth images from jpcr_test_bad_depth; jpcr_node --method j-ftf rejects those with one log line
+# each, processes the 6 good frames and publishes odom, curvature and path; the final path
+# received by jpcr_dds_echo equals jpcr_run's offline trajectory to 1e-9 m. jpcr_run --dds
+# publishes the same path. --idle-timeout and SIGTERM stop the node cleanly; bad command lines
+# exit 2 and bad parameters 1. Every wait is bounded.
+set -uo pipefail
+build=$1 src=$2
+synth=$build/tools/jpcr_synth
+run=$build/tools/jpcr_run
+node=$build/tools/jpcr_node
+play=$build/tools/jpcr_dds_play
+echo_bin=$build/tools/jpcr_dds_echo
+bad=$build/tests/tools/jpcr_test_bad_depth
+tmp=$(mktemp -d)
+pids=()
+cleanup() {
+  for p in "${pids[@]}"; do kill -TERM "$p" 2>/dev/null; done
+  rm -rf "$tmp"
+}
+trap cleanup EXIT
+# shellcheck source=expect.sh
+source "$src/tests/tools/expect.sh"
+export CYCLONEDDS_URI="file://$src/configs/cyclonedds_loopback.xml"
+domain=$(( $$ % 200 + 11 ))
+# Deep enough histories that no frame or result is dropped while the node computes.
+printf 'dds:\n  history_depth: 32\n  image_history_depth: 16\n' > "$tmp/dds.yaml"
+dds=(--params "$tmp/dds.yaml" --domain $domain)
+
+# Waits up to $2 s for pid $1 and returns its exit code (124 after killing it on timeout).
+wait_bounded() {
+  local pid=$1 limit=$2 i
+  for ((i = 0; i < limit * 10; ++i)); do
+    kill -0 "$pid" 2>/dev/null || { wait "$pid"; return $?; }
+    sleep 0.1
+  done
+  kill -KILL "$pid" 2>/dev/null; wait "$pid" 2>/dev/null; return 124
+}
+
+# The final TUM block a `jpcr_dds_echo --tum` of a path printed == a trajectory file, to 1e-9.
+same_path() {
+  /usr/bin/python3 - "$1" "$2" <<'PY'
+import sys
+def poses(lines):
+    return [[float(x) for x in l.split()] for l in lines if l.strip() and not l.startswith("#")]
+echo = open(sys.argv[1]).read().splitlines()
+starts = [i for i, l in enumerate(echo) if l.startswith("path ")]
+if not starts:
+    sys.exit("no path received")
+got = poses(echo[starts[-1] + 1:])
+want = poses(open(sys.argv[2]).read().splitlines())
+if len(got) != len(want):
+    sys.exit("final path has %d poses, offline %d" % (len(got), len(want)))
+worst = 0.0
+for g, w in zip(got, want):
+    if abs(g[0] - w[0]) > 1e-6:
+        sys.exit("stamp %r != %r" % (g[0], w[0]))
+    s = 1.0 if sum(a * b for a, b in zip(g[4:], w[4:])) >= 0 else -1.0
+    worst = max([worst] + [abs(a - b) for a, b in zip(g[1:4], w[1:4])] +
+                [abs(s * a - b) for a, b in zip(g[4:], w[4:])])
+if worst > 1e-9:
+    sys.exit("poses differ by %g" % worst)
+print("ok: %d poses equal to %g" % (len(got), worst))
+PY
+}
+
+expect 0 "wrote 6 frames" -- "$synth" --scene room_spheres --frames 6 --size 160x120 --seed 4 \
+  --out "$tmp/seq"
+
+# jpcr_run offline, publishing the same topics (--dds); its path equals its trajectory.txt.
+"$echo_bin" rt/jpcr/path "${dds[@]}" --tum --timeout 120 > "$tmp/run_path.txt" 2>&1 &
+run_echo=$!; pids+=($run_echo)
+sleep 1
+expect 0 "j-ftf " -- "$run" --dataset "$tmp/seq" --method j-ftf --out "$tmp/off" --dds "${dds[@]}"
+kill -INT $run_echo; wait_bounded $run_echo 10
+same_path "$tmp/run_path.txt" "$tmp/off/trajectory.txt" || { echo "FAIL: jpcr_run --dds path"; cat "$tmp/run_path.txt"; fail=1; }
+
+# The round trip: echoes first, then the node, the malformed images, the good frames.
+"$echo_bin" rt/jpcr/path "${dds[@]}" --tum --timeout 240 > "$tmp/path.txt" 2>&1 &
+path_echo=$!; pids+=($path_echo)
+"$echo_bin" rt/jpcr/odom "${dds[@]}" --count 6 --timeout 240 > "$tmp/odom.txt" 2>&1 &
+odom_echo=$!; pids+=($odom_echo)
+"$echo_bin" rt/jpcr/curvature "${dds[@]}" --count 6 --timeout 240 > "$tmp/curv.txt" 2>&1 &
+curv_echo=$!; pids+=($curv_echo)
+"$echo_bin" rt/jpcr/curvature_color "${dds[@]}" --count 6 --timeout 240 > "$tmp/color.txt" 2>&1 &
+color_echo=$!; pids+=($color_echo)
+"$echo_bin" rt/jpcr/keyframe_pose "${dds[@]}" --count 6 --timeout 240 > "$tmp/kf.txt" 2>&1 &
+kf_echo=$!; pids+=($kf_echo)
+sleep 1
+"$node" "${dds[@]}" --method j-ftf --max-frames 6 --idle-timeout 60 > "$tmp/node.txt" 2> "$tmp/node.err" &
+node_pid=$!; pids+=($node_pid)
+expect 0 "published 3 malformed" -- "$bad" $domain rt/camera/depth/image_raw 3
+expect 0 "published 6 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 \
+  --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
+wait_bounded $node_pid 200; rc=$?
+if [ $rc != 0 ] || ! grep -q "processed 6 frames, 6 keyframes, 6 curvature maps; rejected 3 samples, skipped 0 frames; stopped by --max-frames" "$tmp/node.txt"; then
+  echo "FAIL: jpcr_node exited $rc"; cat "$tmp/node.txt" "$tmp/node.err"; fail=1
+else
+  echo "ok: jpcr_node: $(cat "$tmp/node.txt")"
+fi
+n=$(grep -c "rejected sample" "$tmp/node.err")
+[ "$n" = 3 ] || { echo "FAIL: $n rejection lines, want 3"; cat "$tmp/node.err"; fail=1; }
+grep -q "jpcr_node: frame 6  keyframes 6" "$tmp/node.err" || { echo "FAIL: progress line"; cat "$tmp/node.err"; fail=1; }
+for e in $odom_echo $curv_echo $color_echo $kf_echo; do
+  wait_bounded $e 30 || { echo "FAIL: an echo exited $?"; fail=1; }
+done
+kill -INT $path_echo; wait_bounded $path_echo 10
+n=$(grep -c "^odom stamp=.* frame=map child=camera_depth_optical_frame" "$tmp/odom.txt")
+[ "$n" = 6 ] || { echo "FAIL: $n of 6 odom"; cat "$tmp/odom.txt"; fail=1; }
+n=$(grep -c "cov_diag=\[0 0 0 0 0 0\]" "$tmp/odom.txt")
+[ "$n" = 1 ] || { echo "FAIL: $n odom with zero covariance, want 1 (the first)"; cat "$tmp/odom.txt"; fail=1; }
+n=$(grep -c "^pose stamp=.* frame=map position=" "$tmp/kf.txt")
+[ "$n" = 6 ] || { echo "FAIL: $n of 6 keyframe poses"; cat "$tmp/kf.txt"; fail=1; }
+n=$(grep -c "^image .* 160x120 32FC2 .* valid=" "$tmp/curv.txt")
+[ "$n" = 6 ] || { echo "FAIL: $n of 6 curvature maps"; cat "$tmp/curv.txt"; fail=1; }
+n=$(grep -c "^image .* 160x120 rgb8 .* ok$" "$tmp/color.txt")
+[ "$n" = 6 ] || { echo "FAIL: $n of 6 curvature colour maps"; cat "$tmp/color.txt"; fail=1; }
+same_path "$tmp/path.txt" "$tmp/off/trajectory.txt" || { echo "FAIL: node path vs offline"; cat "$tmp/path.txt"; fail=1; }
+
+# --idle-timeout after the first frame, and SIGTERM before any, both stop with exit 0.
+"$node" "${dds[@]}" --method icp-ftf --idle-timeout 2 > "$tmp/idle.txt" 2>&1 &
+idle_pid=$!; pids+=($idle_pid)
+expect 0 "published 2 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 --frames 0:2 \
+  --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
+wait_bounded $idle_pid 60; rc=$?
+if [ $rc != 0 ] || ! grep -q "processed 2 frames.*stopped by --idle-timeout" "$tmp/idle.txt"; then
+  echo "FAIL: idle timeout: exit $rc"; cat "$tmp/idle.txt"; fail=1
+else
+  echo "ok: $(tail -1 "$tmp/idle.txt")"
+fi
+"$node" "${dds[@]}" > "$tmp/term.txt" 2>&1 &
+term_pid=$!; pids+=($term_pid)
+sleep 1.5; kill -TERM $term_pid; wait_bounded $term_pid 20; rc=$?
+if [ $rc != 0 ] || ! grep -q "processed 0 frames.*stopped by signal" "$tmp/term.txt"; then
+  echo "FAIL: SIGTERM: exit $rc"; cat "$tmp/term.txt"; fail=1
+else
+  echo "ok: SIGTERM: $(tail -1 "$tmp/term.txt")"
+fi
+
+# Bad command lines and parameters.
+expect 0 "usage: jpcr_node" -- "$node" --help
+expect 2 "--method: unknown method 'bundle'" -- "$node" --method bundle
+expect 2 "--window must be in" -- "$node" --window 1
+expect 2 "--max-frames must be >= 0" -- "$node" --max-frames -1
+expect 2 "--idle-timeout must be >= 0" -- "$node" --idle-timeout -1
+expect 2 "domain must be in 0..232" -- "$node" --domain 300
+printf 'pipeline:\n  window: 99\n' > "$tmp/bad.yaml"
+expect 1 "error: .*window" -- "$node" --params "$tmp/bad.yaml"
+expect 1 "error: .*nosuch" -- "$node" --params "$tmp/nosuch.yaml"
+exit $fail

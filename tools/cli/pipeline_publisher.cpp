@@ -1,0 +1,27 @@
+#include "cli/pipeline_publisher.hpp"
+
+#include "jpcr/io/curvature_colors.hpp"
+
+namespace jpcr::cli {
+
+void PipelinePublisher::keyframe_final(const KeyframePipeline& pipeline, int keyframe,
+                                       const QuadricMap& quadrics) {
+  const StampedPose& pose = pipeline.keyframes().at(static_cast<std::size_t>(keyframe)).refined;
+  publisher_.publish_keyframe(pose, quadrics.curvature, render_curvature(quadrics.curvature));
+  ++keyframes_published_;
+}
+
+void PipelinePublisher::frame_added(const KeyframePipeline& pipeline, const PipelineFrame& frame) {
+  const Trajectory trajectory = pipeline.trajectory();
+  publisher_.publish_odometry(trajectory.back(), frame.icp_covariance);
+  if (pipeline.keyframes().size() != keyframes_seen_) {
+    keyframes_seen_ = pipeline.keyframes().size();
+    publisher_.publish_path(trajectory);
+  }
+}
+
+void PipelinePublisher::finished(const KeyframePipeline& pipeline) {
+  publisher_.publish_path(pipeline.trajectory());
+}
+
+}  // namespace jpcr::cli
