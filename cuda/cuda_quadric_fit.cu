@@ -16,6 +16,7 @@
 
 #include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/device_memory.hpp"
+#include "jpcr/quadric/plane_normal_kernel.hpp"
 #include "jpcr/quadric/quadric_fit_kernel.hpp"
 
 namespace jpcr {
@@ -78,6 +79,21 @@ __device__ __forceinline__ void fit_and_store(const PixelOffset* pattern, int pa
   out.status[i] = status;
 }
 
+// The initial normals (method.md §3), as estimate_normals computes them on the CPU.
+__global__ void __launch_bounds__(kBlockWidth* kBlockHeight)
+    plane_normals(VertexView vertices, NormalEstimationParams params,
+                  Eigen::Vector3f* __restrict__ normals) {
+  const int u = blockIdx.x * kBlockWidth + threadIdx.x;
+  const int v = blockIdx.y * kBlockHeight + threadIdx.y;
+  if (u >= vertices.width || v >= vertices.height) return;
+  normals[v * vertices.width + u] = plane_normal(vertices, u, v, params);
+}
+
+dim3 grid_for(const VertexView& view) {
+  return dim3((view.width + kBlockWidth - 1) / kBlockWidth,
+              (view.height + kBlockHeight - 1) / kBlockHeight);
+}
+
 template <typename Scalar>
 __global__ void __launch_bounds__(kBlockWidth* kBlockHeight)
     quad_it_parameter_pattern(const __grid_constant__ ParameterPattern pattern, VertexView vertices,
@@ -107,8 +123,7 @@ void launch_quad_it(const NeighbourhoodPattern& pattern, const DeviceArray<Pixel
                     const QuadricFitParams& params, const QuadricMapView& out,
                     cudaStream_t stream) {
   const dim3 block(kBlockWidth, kBlockHeight);
-  const dim3 grid((view.width + kBlockWidth - 1) / kBlockWidth,
-                  (view.height + kBlockHeight - 1) / kBlockHeight);
+  const dim3 grid = grid_for(view);
   const int size = pattern.size();
   if (size <= kParameterPatternCapacity) {
     ParameterPattern p{};
@@ -151,7 +166,7 @@ void poison(Image<T>& image) {
 // The stream, the timing events and the buffers, sized for the largest frame seen so far.
 struct CudaQuadricFit::Device {
   cudaStream_t stream = nullptr;
-  cudaEvent_t events[4] = {};  // start, uploaded, fitted, downloaded
+  cudaEvent_t events[5] = {};  // start, uploaded, normals, fitted, downloaded
   DeviceArray<Eigen::Vector3f> vertices, normals, direction;
   DeviceArray<Quadric> quadrics;
   DeviceArray<Eigen::Vector2f> curvature;
@@ -199,9 +214,17 @@ CudaQuadricFit::CudaQuadricFit(const QuadricParams& params, CudaPrecision precis
 
 CudaQuadricFit::~CudaQuadricFit() = default;
 
+QuadricMap CudaQuadricFit::estimate(const VertexMap& vertices) const {
+  return fit(vertices, nullptr);
+}
+
 QuadricMap CudaQuadricFit::estimate(const VertexMap& vertices, const NormalMap& normals) const {
   if (normals.width() != vertices.width() || normals.height() != vertices.height())
     throw std::invalid_argument("CudaQuadricFit: normal map and vertex map differ in size");
+  return fit(vertices, &normals);
+}
+
+QuadricMap CudaQuadricFit::fit(const VertexMap& vertices, const NormalMap* normals) const {
   const int width = vertices.width(), height = vertices.height();
   const std::size_t pixels = vertices.size();
   if (pixels == 0) return QuadricMap(width, height);
@@ -214,7 +237,7 @@ QuadricMap CudaQuadricFit::estimate(const VertexMap& vertices, const NormalMap& 
   const cudaStream_t stream = d.stream;
   JPCR_CUDA_CHECK(cudaEventRecord(d.events[0], stream));
   upload(d.vertices, vertices.data(), pixels, stream);
-  upload(d.normals, normals.data(), pixels, stream);
+  if (normals != nullptr) upload(d.normals, normals->data(), pixels, stream);
   if (pattern_size > kParameterPatternCapacity)
     upload(d.pattern, pattern.offsets.data(), pattern_size, stream);
   if (d.poison_outputs) {
@@ -226,13 +249,20 @@ QuadricMap CudaQuadricFit::estimate(const VertexMap& vertices, const NormalMap& 
   JPCR_CUDA_CHECK(cudaEventRecord(d.events[1], stream));
 
   const VertexView view{d.vertices.data(), width, height};
+  if (normals == nullptr) {
+    plane_normals<<<grid_for(view), dim3(kBlockWidth, kBlockHeight), 0, stream>>>(
+        view, params_.normals, d.normals.data());
+    JPCR_CUDA_CHECK_LAUNCH("plane_normals");
+  }
+  JPCR_CUDA_CHECK(cudaEventRecord(d.events[2], stream));
+
   const QuadricMapView out{d.quadrics.data(), d.curvature.data(), d.direction.data(),
                            d.status.data()};
   if (precision_ == CudaPrecision::kDouble)
     launch_quad_it<double>(pattern, d.pattern, view, d.normals.data(), params_.fit, out, stream);
   else
     launch_quad_it<float>(pattern, d.pattern, view, d.normals.data(), params_.fit, out, stream);
-  JPCR_CUDA_CHECK(cudaEventRecord(d.events[2], stream));
+  JPCR_CUDA_CHECK(cudaEventRecord(d.events[3], stream));
 
   QuadricMap map(width, height);  // the host allocation overlaps the kernel
   if (d.poison_outputs) {
@@ -245,9 +275,10 @@ QuadricMap CudaQuadricFit::estimate(const VertexMap& vertices, const NormalMap& 
   download(map.curvature.data(), d.curvature, pixels, stream);
   download(map.direction.data(), d.direction, pixels, stream);
   download(map.status.data(), d.status, pixels, stream);
-  JPCR_CUDA_CHECK(cudaEventRecord(d.events[3], stream));
+  JPCR_CUDA_CHECK(cudaEventRecord(d.events[4], stream));
   JPCR_CUDA_CHECK(cudaStreamSynchronize(stream));
-  d.timing = {d.elapsed_ms(0, 1), d.elapsed_ms(1, 2), d.elapsed_ms(2, 3), d.elapsed_ms(0, 3)};
+  d.timing = {d.elapsed_ms(0, 1), d.elapsed_ms(1, 2), d.elapsed_ms(2, 3), d.elapsed_ms(3, 4),
+              d.elapsed_ms(0, 4)};
   return map;
 }
 

@@ -1,7 +1,8 @@
 // Quad IT on the GPU (method.md §3; issue 7): one thread per pixel runs the reference kernel
 // fit_quadric_pixel<double> (quadric/quadric_fit_kernel.hpp), the same code the CPU parity tests
-// run on the host, and writes quadric, curvature, direction and status for every pixel. Same
-// interface as QuadricFit. Plain C++ header; the CUDA side is in cuda_quadric_fit.cu.
+// run on the host, and writes quadric, curvature, direction and status for every pixel; the
+// initial normals, unless given, come from plane_normal on the device too. Same interface as
+// QuadricFit. Plain C++ header; the CUDA side is in cuda_quadric_fit.cu.
 //
 // Device buffers are owned by the estimator, allocated for the first frame of a size and reused
 // for every later frame of that size (no per-frame cudaMalloc). The pattern offsets travel as a
@@ -19,7 +20,8 @@ namespace jpcr {
 
 /// Device times of the last estimate() call (CUDA events), in ms.
 struct CudaQuadricFitTiming {
-  float upload_ms = 0;    // vertices and normals to the device
+  float upload_ms = 0;    // vertices (and given normals) to the device
+  float normals_ms = 0;   // the plane-normal kernel (0 when the normals were given)
   float kernel_ms = 0;    // the Quad IT kernel
   float download_ms = 0;  // the QuadricMap back to the host
   float total_ms = 0;     // first upload to last download
@@ -39,8 +41,9 @@ class CudaQuadricFit final : public CurvatureEstimator {
   CudaQuadricFit(const CudaQuadricFit&) = delete;
   CudaQuadricFit& operator=(const CudaQuadricFit&) = delete;
 
-  using CurvatureEstimator::estimate;
-  /// Thread-safe (calls are serialised: they share the device buffers).
+  /// Thread-safe (calls are serialised: they share the device buffers). Without `normals`, the
+  /// initial normals are computed on the device by the same plane_normal as on the CPU.
+  QuadricMap estimate(const VertexMap& vertices) const override;
   QuadricMap estimate(const VertexMap& vertices, const NormalMap& normals) const override;
   std::string name() const override { return "quad-it-cuda"; }
   CudaPrecision precision() const { return precision_; }
@@ -55,6 +58,8 @@ class CudaQuadricFit final : public CurvatureEstimator {
 
  private:
   struct Device;
+  QuadricMap fit(const VertexMap& vertices, const NormalMap* normals) const;
+
   QuadricParams params_;
   CudaPrecision precision_;
   std::unique_ptr<Device> device_;

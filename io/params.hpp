@@ -4,6 +4,7 @@
 
 #include <string>
 
+#include "jpcr/cuda/device_selection.hpp"
 #include "jpcr/io/dds/dds_config.hpp"
 #include "jpcr/io/synthetic_noise.hpp"
 #include "jpcr/io/synthetic_trajectory.hpp"
@@ -23,6 +24,7 @@ struct SyntheticParams {
 };
 
 struct Params {
+  ComputeDevice device = ComputeDevice::kAuto;  // key `device:` auto | cpu | cuda (issue 7)
   DatasetParams dataset;
   SyntheticParams synthetic;
   QuadricParams quadric;  // section `quadric:` (pattern, normals, Quad IT)

@@ -111,6 +111,33 @@ TEST(CudaQuadricFit, MatchesTheReferenceKernelOnRandomFrames) {
   }
 }
 
+// Without given normals the device computes them with the CPU's plane_normal: the whole GPU path
+// against estimate_normals + the reference kernel on the host.
+TEST(CudaQuadricFit, NormalsOnTheDeviceGiveTheSameMapAsCpuNormals) {
+  SKIP_WITHOUT_GPU();
+  const QuadricParams params;
+  const std::uint64_t seed = test::test_seed();
+  CudaQuadricFit fit(params);
+  fit.set_poison_outputs(true);
+  for (const auto& [w, h] : {std::pair{320, 240}, std::pair{640, 480}}) {
+    const SyntheticFrame f = test::random_frame(seed, w, h);
+    const VertexMap vertices = compute_vertex_map(f.frame.depth, f.frame.camera);
+    const QuadricMap map = fit.estimate(vertices);
+    expect_every_element_written(map);
+    EXPECT_GT(fit.last_timing().normals_ms, 0.0f);
+    const Parity p =
+        compare_with_reference(map, vertices, estimate_normals(vertices, params.normals), params);
+    std::printf(
+        "%dx%d, normals on the device: kappa RMS %.3g 1/m, status differs at %d of %d; "
+        "normals %.3f ms, fit %.3f ms\n",
+        w, h, p.rms, p.status_differ, p.pixels, fit.last_timing().normals_ms,
+        fit.last_timing().kernel_ms);
+    EXPECT_GT(p.valid_both, p.pixels / 3) << "seed " << seed;
+    EXPECT_LE(p.rms, 1e-4) << "seed " << seed;
+    EXPECT_LE(p.status_differ, p.pixels / 1000) << "seed " << seed;
+  }
+}
+
 TEST(CudaQuadricFit, PatternsBeyondTheParameterBankUseGlobalMemory) {
   SKIP_WITHOUT_GPU();
   QuadricParams params;

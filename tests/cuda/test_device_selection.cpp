@@ -7,6 +7,7 @@
 
 #include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/curvature_estimator_factory.hpp"
+#include "jpcr/io/params.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
@@ -89,6 +90,22 @@ TEST(DeviceSelection, TheFactoryBuildsTheEstimatorOfTheChosenDevice) {
   const auto any = make_curvature_estimator(ComputeDevice::kAuto, QuadricParams{}, log);
   EXPECT_EQ(any->name(), cuda_device_available() ? "quad-it-cuda" : "quad-it");
   EXPECT_EQ(lines(log.str()), 2);
+}
+
+TEST(DeviceSelection, TheParameterFileSetsTheDevice) {
+  EXPECT_EQ(parse_params("dataset: {}\n", "p.yaml").device, ComputeDevice::kAuto);
+  EXPECT_EQ(parse_params("device: cpu\n", "p.yaml").device, ComputeDevice::kCpu);
+  EXPECT_EQ(parse_params("device: cuda\n", "p.yaml").device, ComputeDevice::kCuda);
+  EXPECT_EQ(load_params(JPCR_SOURCE_DIR "/configs/default.yaml").device, ComputeDevice::kAuto);
+  try {
+    parse_params("device: gpu0\n", "p.yaml");
+    ADD_FAILURE() << "accepted device: gpu0";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("p.yaml"), std::string::npos) << what;
+    EXPECT_NE(what.find("auto | cpu | cuda"), std::string::npos) << what;
+    EXPECT_NE(what.find("'gpu0'"), std::string::npos) << what;
+  }
 }
 
 }  // namespace
