@@ -9,7 +9,8 @@ namespace jpcr {
 std::unique_ptr<CurvatureEstimator> make_curvature_estimator(ComputeDevice device,
                                                              const QuadricParams& params,
                                                              std::ostream& log) {
-  const ComputeDevice chosen = resolve_device(device, log);
+  // Without CUDA, resolve_device never returns kCuda (it throws for a cuda request).
+  [[maybe_unused]] const ComputeDevice chosen = resolve_device(device, log);
 #if defined(JPCR_HAVE_CUDA)
   if (chosen == ComputeDevice::kCuda) return std::make_unique<CudaQuadricFit>(params);
 #endif
