@@ -200,6 +200,9 @@ Params load_params(const std::string& path) {
 Params parse_params(const std::string& text, const std::string& path) {
   YamlSection yaml(parse_yaml(text, path), path);
   Params params;
+  std::string device = to_string(params.device);
+  yaml.read_choice("device", device, {"auto", "cpu", "cuda"});
+  params.device = parse_compute_device(device);
   read_dataset(yaml.section("dataset"), params.dataset);
   read_synthetic(yaml.section("synthetic"), params.synthetic);
   read_frontend(yaml.section("frontend"), params.frontend);

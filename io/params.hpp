@@ -5,6 +5,7 @@
 #include <string>
 
 #include "jpcr/backend/keyframe_pipeline.hpp"
+#include "jpcr/cuda/device_selection.hpp"
 #include "jpcr/frontend/frontend_params.hpp"
 #include "jpcr/io/dds/dds_config.hpp"
 #include "jpcr/io/synthetic_noise.hpp"
@@ -25,6 +26,7 @@ struct SyntheticParams {
 };
 
 struct Params {
+  ComputeDevice device = ComputeDevice::kAuto;  // key `device:` auto | cpu | cuda (issue 7)
   DatasetParams dataset;
   SyntheticParams synthetic;
   FrontendParams frontend;  // section `frontend:` (jpcr_odometry, the tracker)

@@ -15,8 +15,9 @@ namespace jpcr {
 class CurvatureEstimator {
  public:
   virtual ~CurvatureEstimator() = default;
-  /// The initial normals are estimated here (surface_normals.hpp) unless given.
-  QuadricMap estimate(const VertexMap& vertices) const;
+  /// The initial normals are estimated here (surface_normals.hpp) unless given; virtual so that
+  /// the CUDA estimator can compute them on the device.
+  virtual QuadricMap estimate(const VertexMap& vertices) const;
   virtual QuadricMap estimate(const VertexMap& vertices, const NormalMap& normals) const = 0;
   virtual std::string name() const = 0;
   virtual const QuadricParams& params() const = 0;

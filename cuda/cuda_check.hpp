@@ -1,0 +1,31 @@
+// Error checking for every CUDA runtime call (issue 7): JPCR_CUDA_CHECK(cudaMalloc(...)) throws
+// jpcr::CudaError naming the call, file, line and cudaGetErrorString. Plain C++: the error code
+// travels as an int, so this header includes no CUDA header.
+#pragma once
+
+#include <stdexcept>
+#include <string>
+
+namespace jpcr {
+
+/// A failed CUDA call or kernel launch, or a CUDA device that was asked for and is not there.
+class CudaError : public std::runtime_error {
+ public:
+  explicit CudaError(const std::string& what) : std::runtime_error(what) {}
+};
+
+/// Throws CudaError unless `code` (a cudaError_t) is cudaSuccess.
+void cuda_check(int code, const char* call, const char* file, int line);
+
+/// After a kernel launch: the launch error (cudaGetLastError) and, when synchronous checking is
+/// on, the kernel's own error (cudaDeviceSynchronize).
+void cuda_check_launch(const char* kernel, const char* file, int line);
+
+/// Synchronous checking: on in debug builds (no NDEBUG) and when JPCR_CUDA_SYNC=1 (the GPU
+/// tests set it), so a faulting kernel is reported at its launch.
+bool cuda_synchronous_checks();
+
+}  // namespace jpcr
+
+#define JPCR_CUDA_CHECK(expr) ::jpcr::cuda_check(static_cast<int>(expr), #expr, __FILE__, __LINE__)
+#define JPCR_CUDA_CHECK_LAUNCH(kernel) ::jpcr::cuda_check_launch(kernel, __FILE__, __LINE__)

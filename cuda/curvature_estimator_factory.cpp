@@ -1,0 +1,20 @@
+#include "jpcr/cuda/curvature_estimator_factory.hpp"
+
+#if defined(JPCR_HAVE_CUDA)
+#include "jpcr/cuda/cuda_quadric_fit.hpp"
+#endif
+
+namespace jpcr {
+
+std::unique_ptr<CurvatureEstimator> make_curvature_estimator(ComputeDevice device,
+                                                             const QuadricParams& params,
+                                                             std::ostream& log) {
+  // Without CUDA, resolve_device never returns kCuda (it throws for a cuda request).
+  [[maybe_unused]] const ComputeDevice chosen = resolve_device(device, log);
+#if defined(JPCR_HAVE_CUDA)
+  if (chosen == ComputeDevice::kCuda) return std::make_unique<CudaQuadricFit>(params);
+#endif
+  return std::make_unique<QuadricFit>(params);
+}
+
+}  // namespace jpcr

@@ -1,0 +1,103 @@
+#include "jpcr/cuda/device_selection.hpp"
+
+#include "jpcr/cuda/cuda_check.hpp"
+#include "jpcr/quadric/error.hpp"
+
+#if defined(JPCR_HAVE_CUDA)
+#include <cuda_runtime_api.h>
+#endif
+
+namespace jpcr {
+
+namespace {
+
+CudaDeviceInfo query_device_zero() {
+  CudaDeviceInfo info;
+#if defined(JPCR_HAVE_CUDA)
+  int count = 0;
+  const cudaError_t error = cudaGetDeviceCount(&count);
+  if (error != cudaSuccess) {
+    cudaGetLastError();  // the failed query must not leak into later calls
+    info.description = cudaGetErrorName(error);
+    return info;
+  }
+  if (count < 1) {
+    info.description = "cudaGetDeviceCount found 0 devices";
+    return info;
+  }
+  cudaDeviceProp prop{};
+  const cudaError_t prop_error = cudaGetDeviceProperties(&prop, 0);
+  if (prop_error != cudaSuccess) {
+    cudaGetLastError();
+    info.description = cudaGetErrorName(prop_error);
+    return info;
+  }
+  const std::string arch = "sm_" + std::to_string(prop.major) + std::to_string(prop.minor);
+  // The kernels are built for sm_75 and newer (nvcc 13 has nothing older).
+  if (prop.major < 7 || (prop.major == 7 && prop.minor < 5)) {
+    info.description = std::string(prop.name) + ", " + arch + " is older than sm_75";
+    return info;
+  }
+  info.available = true;
+  info.description = std::string(prop.name) + ", " + arch;
+#else
+  info.description = "built without CUDA";
+#endif
+  return info;
+}
+
+}  // namespace
+
+ComputeDevice parse_compute_device(const std::string& text) {
+  if (text == "auto") return ComputeDevice::kAuto;
+  if (text == "cpu") return ComputeDevice::kCpu;
+  if (text == "cuda") return ComputeDevice::kCuda;
+  throw InputError("device: '" + text + "' is not one of auto, cpu, cuda");
+}
+
+std::string to_string(ComputeDevice device) {
+  switch (device) {
+    case ComputeDevice::kAuto:
+      return "auto";
+    case ComputeDevice::kCpu:
+      return "cpu";
+    case ComputeDevice::kCuda:
+      return "cuda";
+  }
+  return "?";
+}
+
+const CudaDeviceInfo& query_cuda_device() {
+  static const CudaDeviceInfo info = query_device_zero();
+  return info;
+}
+
+bool cuda_device_available() {
+  return query_cuda_device().available;
+}
+
+ComputeDevice resolve_device(ComputeDevice requested, std::ostream& log) {
+  const CudaDeviceInfo& gpu = query_cuda_device();
+  ComputeDevice chosen = requested;
+  std::string why;
+  switch (requested) {
+    case ComputeDevice::kCpu:
+      why = "requested";
+      break;
+    case ComputeDevice::kCuda:
+      if (!gpu.available)
+        throw CudaError("jpcr: device cuda was requested but no CUDA device is usable (" +
+                        gpu.description + "); use device: auto or cpu");
+      why = gpu.description;
+      break;
+    case ComputeDevice::kAuto:
+      chosen = gpu.available ? ComputeDevice::kCuda : ComputeDevice::kCpu;
+      why = gpu.available ? gpu.description : "no CUDA device: " + gpu.description;
+      break;
+  }
+  log << "jpcr: device " << to_string(requested) << " -> " << to_string(chosen) << " (" << why
+      << ")\n";
+  return chosen;
+}
+
+}  // namespace jpcr

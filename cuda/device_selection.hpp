@@ -1,0 +1,36 @@
+// Which processor runs the per-pixel work (issue 7, config key `device: auto | cpu | cuda`):
+// `auto` takes the GPU when cudaGetDeviceCount finds one and the CPU otherwise, and says which in
+// one log line. Built in every profile; without CUDA no device is ever available.
+#pragma once
+
+#include <ostream>
+#include <string>
+
+namespace jpcr {
+
+enum class ComputeDevice { kAuto, kCpu, kCuda };
+
+/// Parses "auto", "cpu" or "cuda"; throws InputError naming the allowed values otherwise.
+ComputeDevice parse_compute_device(const std::string& text);
+std::string to_string(ComputeDevice device);
+
+/// What cudaGetDeviceCount and cudaGetDeviceProperties say about device 0.
+struct CudaDeviceInfo {
+  bool available = false;
+  /// "NVIDIA H100 80GB HBM3, sm_90" when available; otherwise why not, e.g. "cudaErrorNoDevice"
+  /// or "built without CUDA".
+  std::string description;
+};
+
+/// Queried once per process. Errors (no driver: 35, no device: 100, ...) mean "no GPU", never a
+/// throw.
+const CudaDeviceInfo& query_cuda_device();
+bool cuda_device_available();
+
+/// The device to use for `requested`, with exactly one line on `log`, e.g.
+///   jpcr: device auto -> cpu (no CUDA device: cudaErrorNoDevice)
+///   jpcr: device auto -> cuda (NVIDIA H100 80GB HBM3, sm_90)
+/// Never returns kAuto. Requesting kCuda without a usable GPU throws CudaError saying why.
+ComputeDevice resolve_device(ComputeDevice requested, std::ostream& log);
+
+}  // namespace jpcr

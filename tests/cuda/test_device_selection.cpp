@@ -1,0 +1,112 @@
+// `device: auto | cpu | cuda` (issue 7): parsing, one log line saying which device was chosen,
+// a clear error for cuda without a GPU, and the estimator the factory builds. Runs with and
+// without a GPU; each test checks the branch the machine takes.
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "jpcr/cuda/cuda_check.hpp"
+#include "jpcr/cuda/curvature_estimator_factory.hpp"
+#include "jpcr/io/params.hpp"
+#include "jpcr/quadric/error.hpp"
+
+namespace jpcr {
+namespace {
+
+int lines(const std::string& s) {
+  int n = 0;
+  for (char c : s)
+    n += c == '\n' ? 1 : 0;
+  return n;
+}
+
+TEST(DeviceSelection, ParsesTheThreeNames) {
+  EXPECT_EQ(parse_compute_device("auto"), ComputeDevice::kAuto);
+  EXPECT_EQ(parse_compute_device("cpu"), ComputeDevice::kCpu);
+  EXPECT_EQ(parse_compute_device("cuda"), ComputeDevice::kCuda);
+  for (ComputeDevice d : {ComputeDevice::kAuto, ComputeDevice::kCpu, ComputeDevice::kCuda})
+    EXPECT_EQ(parse_compute_device(to_string(d)), d);
+}
+
+TEST(DeviceSelection, RejectsOtherNamesListingTheAllowedOnes) {
+  for (const char* bad : {"gpu0", "", "CUDA", "gpu"}) {
+    try {
+      parse_compute_device(bad);
+      ADD_FAILURE() << "accepted '" << bad << "'";
+    } catch (const InputError& e) {
+      const std::string what = e.what();
+      EXPECT_NE(what.find(std::string("'") + bad + "'"), std::string::npos) << what;
+      EXPECT_NE(what.find("auto, cpu, cuda"), std::string::npos) << what;
+    }
+  }
+}
+
+TEST(DeviceSelection, CpuIsAlwaysTheCpu) {
+  std::ostringstream log;
+  EXPECT_EQ(resolve_device(ComputeDevice::kCpu, log), ComputeDevice::kCpu);
+  EXPECT_EQ(log.str(), "jpcr: device cpu -> cpu (requested)\n");
+}
+
+TEST(DeviceSelection, AutoTakesTheGpuWhenThereIsOneAndSaysWhichInOneLine) {
+  std::ostringstream log;
+  const ComputeDevice chosen = resolve_device(ComputeDevice::kAuto, log);
+  EXPECT_EQ(lines(log.str()), 1) << log.str();
+  if (cuda_device_available()) {
+    EXPECT_EQ(chosen, ComputeDevice::kCuda);
+    EXPECT_EQ(log.str().rfind("jpcr: device auto -> cuda (", 0), 0u) << log.str();
+    EXPECT_NE(log.str().find(", sm_"), std::string::npos) << log.str();
+  } else {
+    EXPECT_EQ(chosen, ComputeDevice::kCpu);
+    EXPECT_EQ(log.str(), "jpcr: device auto -> cpu (no CUDA device: " +
+                             query_cuda_device().description + ")\n");
+  }
+}
+
+TEST(DeviceSelection, CudaWithoutAGpuIsAClearError) {
+  std::ostringstream log;
+  if (cuda_device_available()) {
+    EXPECT_EQ(resolve_device(ComputeDevice::kCuda, log), ComputeDevice::kCuda);
+    EXPECT_EQ(lines(log.str()), 1);
+    return;
+  }
+  try {
+    resolve_device(ComputeDevice::kCuda, log);
+    ADD_FAILURE() << "device cuda resolved without a GPU";
+  } catch (const CudaError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("device cuda was requested but no CUDA device is usable"),
+              std::string::npos)
+        << what;
+    EXPECT_NE(what.find(query_cuda_device().description), std::string::npos) << what;
+    EXPECT_NE(what.find("use device: auto or cpu"), std::string::npos) << what;
+  }
+  EXPECT_TRUE(log.str().empty());
+}
+
+TEST(DeviceSelection, TheFactoryBuildsTheEstimatorOfTheChosenDevice) {
+  std::ostringstream log;
+  const auto cpu = make_curvature_estimator(ComputeDevice::kCpu, QuadricParams{}, log);
+  EXPECT_EQ(cpu->name(), "quad-it");
+  const auto any = make_curvature_estimator(ComputeDevice::kAuto, QuadricParams{}, log);
+  EXPECT_EQ(any->name(), cuda_device_available() ? "quad-it-cuda" : "quad-it");
+  EXPECT_EQ(lines(log.str()), 2);
+}
+
+TEST(DeviceSelection, TheParameterFileSetsTheDevice) {
+  EXPECT_EQ(parse_params("dataset: {}\n", "p.yaml").device, ComputeDevice::kAuto);
+  EXPECT_EQ(parse_params("device: cpu\n", "p.yaml").device, ComputeDevice::kCpu);
+  EXPECT_EQ(parse_params("device: cuda\n", "p.yaml").device, ComputeDevice::kCuda);
+  EXPECT_EQ(load_params(JPCR_SOURCE_DIR "/configs/default.yaml").device, ComputeDevice::kAuto);
+  try {
+    parse_params("device: gpu0\n", "p.yaml");
+    ADD_FAILURE() << "accepted device: gpu0";
+  } catch (const InputError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("p.yaml"), std::string::npos) << what;
+    EXPECT_NE(what.find("auto | cpu | cuda"), std::string::npos) << what;
+    EXPECT_NE(what.find("'gpu0'"), std::string::npos) << what;
+  }
+}
+
+}  // namespace
+}  // namespace jpcr
