@@ -18,7 +18,6 @@
 
 namespace jpcr {
 
-
 struct SyntheticFrame {
   /// Timestamp, noisy depth (m, 0 = no measurement), the camera, and colour shaded by normal.
   Frame frame;
