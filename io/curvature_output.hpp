@@ -31,4 +31,20 @@ std::string format_curvature_ply(const VertexMap& vertices, const QuadricMap& ma
 void save_curvature_png(const std::string& path, const CurvatureImage& curvature,
                         const CurvatureColorParams& colors = {});
 
+/// The per-frame outputs of the curvature tools under one directory: curvature/<stamp>.npy,
+/// curvature_png/<stamp>.png and, with `ply`, ply/<stamp>.ply (full profile only). The
+/// directories are created by the constructor.
+class CurvatureWriter {
+ public:
+  CurvatureWriter(std::string directory, bool ply, const CurvatureColorParams& colors = {});
+  void write(const std::string& stamp, const QuadricMap& map, const VertexMap& vertices) const;
+  std::size_t written() const { return written_; }
+
+ private:
+  std::string directory_;
+  bool ply_;
+  CurvatureColorParams colors_;
+  mutable std::size_t written_ = 0;
+};
+
 }  // namespace jpcr

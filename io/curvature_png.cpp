@@ -3,6 +3,7 @@
 
 #include <opencv2/imgproc.hpp>
 
+#include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/curvature_output.hpp"
 #include "jpcr/io/depth_png.hpp"
 
@@ -33,6 +34,22 @@ void save_curvature_png(const std::string& path, const CurvatureImage& curvature
     label(image, range, key.x0 + 4, key.y0 + key.size / 2 + key.size / 8, size);
   }
   save_color_png(path, image);
+}
+
+CurvatureWriter::CurvatureWriter(std::string directory, bool ply,
+                                 const CurvatureColorParams& colors)
+    : directory_(std::move(directory)), ply_(ply), colors_(colors) {
+  ensure_directory(directory_ + "/curvature");
+  ensure_directory(directory_ + "/curvature_png");
+  if (ply_) ensure_directory(directory_ + "/ply");
+}
+
+void CurvatureWriter::write(const std::string& stamp, const QuadricMap& map,
+                            const VertexMap& vertices) const {
+  write_curvature_npy(directory_ + "/curvature/" + stamp + ".npy", map.curvature);
+  save_curvature_png(directory_ + "/curvature_png/" + stamp + ".png", map.curvature, colors_);
+  if (ply_) write_curvature_ply(directory_ + "/ply/" + stamp + ".ply", vertices, map, colors_);
+  ++written_;
 }
 
 }  // namespace jpcr

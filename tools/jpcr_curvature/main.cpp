@@ -100,9 +100,7 @@ int run(int argc, char** argv) {
     const cli::FrameRange range =
         cli::parse_frame_range(args.has("frames") ? args.get("frames") : "", dataset->size());
     const fs::path out = args.get("out");
-    for (const char* sub : {"curvature", "curvature_png"})
-      ensure_directory((out / sub).string());
-    if (args.get_flag("ply")) ensure_directory((out / "ply").string());
+    const CurvatureWriter writer(out.string(), args.get_flag("ply"), colors);
     std::cerr << "jpcr_curvature: " << dataset->description() << ", " << estimator->name()
               << ", frames " << range.first << ":" << range.last << '\n';
 
@@ -120,12 +118,7 @@ int run(int argc, char** argv) {
                   << "): no valid curvature (" << record.summary.no_centre << " of "
                   << record.summary.pixels << " pixels without depth)\n";
       }
-      write_curvature_npy((out / "curvature" / (record.stamp + ".npy")).string(), map.curvature);
-      save_curvature_png((out / "curvature_png" / (record.stamp + ".png")).string(), map.curvature,
-                         colors);
-      if (args.get_flag("ply"))
-        write_curvature_ply((out / "ply" / (record.stamp + ".ply")).string(), vertices, map,
-                            colors);
+      writer.write(record.stamp, map, vertices);
       std::ostringstream extra;
       extra.precision(3);
       extra << "valid " << 100.0 * record.summary.valid / record.summary.pixels << " %  "

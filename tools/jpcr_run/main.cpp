@@ -84,15 +84,11 @@ int run_main(int argc, char** argv) {
     const cli::FrameRange range =
         cli::parse_frame_range(args.has("frames") ? args.get("frames") : "", dataset->size());
     const fs::path out = args.get("out");
-    for (const char* sub : {"curvature", "curvature_png"})
-      ensure_directory((out / sub).string());
-    if (args.get_flag("ply")) ensure_directory((out / "ply").string());
+    const CurvatureWriter writer(out.string(), args.get_flag("ply"));
     std::cerr << "jpcr_run: " << dataset->description() << ", method " << to_string(pipeline.method)
               << ", window " << pipeline.window << ", frames " << range.first << ":" << range.last
               << '\n';
 
-    const bool ply = args.get_flag("ply");
-    std::size_t maps = 0;
 #ifdef JPCR_HAVE_DDS
     std::optional<DdsParticipant> participant;
     std::optional<cli::PipelinePublisher> dds;
@@ -109,14 +105,9 @@ int run_main(int argc, char** argv) {
 #endif
       (void)k;
       (void)self;
-      const std::string stamp = format_stamp(frame.timestamp);
-      write_curvature_npy((out / "curvature" / (stamp + ".npy")).string(), quadrics.curvature);
-      save_curvature_png((out / "curvature_png" / (stamp + ".png")).string(), quadrics.curvature);
-      if (ply) {
-        write_curvature_ply((out / "ply" / (stamp + ".ply")).string(),
-                            compute_vertex_map(frame.depth, frame.camera), quadrics);
-      }
-      ++maps;
+      // The vertex map is only needed for the PLY; compute_vertex_map is cheap next to J-ftf.
+      writer.write(format_stamp(frame.timestamp), quadrics,
+                   compute_vertex_map(frame.depth, frame.camera));
     });
     self = &runner;
     cli::Progress progress("jpcr_run");
@@ -153,7 +144,8 @@ int run_main(int argc, char** argv) {
       run::write_report(o, args.get("dataset"), runner, front_errors, errors, progress.seconds());
     });
     std::cout << "wrote " << refined.size() << " poses, " << runner.keyframes().size()
-              << " keyframes and " << maps << " curvature maps to " << out.string() << '\n';
+              << " keyframes and " << writer.written() << " curvature maps to " << out.string()
+              << '\n';
     if (errors) run::print_error_table(std::cout, to_string(pipeline.method), front_errors, errors);
     return 0;
   });
