@@ -41,9 +41,16 @@ pairs = [
     ("ATE", got["ate"]["translation_m"]["rmse"], ref["ate"]),
     ("RPE/frame t", got["rpe_per_frame"]["translation_m"]["rmse"], ref["rpe_frame_t"]),
     ("RPE/frame r", got["rpe_per_frame"]["rotation_deg"]["rmse"], ref["rpe_frame_r"]),
-    ("RPE/s t", got["rpe_per_second"]["translation_m"]["rmse"], ref["rpe_second_t"]),
-    ("RPE/s r", got["rpe_per_second"]["rotation_deg"]["rmse"], ref["rpe_second_r"]),
 ]
+# RPE per second needs more than 1 s of estimates: the 300 shared frames have it, the 20 test
+# frames (0.66 s) do not, and then both implementations must find no pair.
+if got["rpe_per_second"] is None:
+    assert ref["rpe_second_pairs"] == 0, ref
+else:
+    pairs += [
+        ("RPE/s t", got["rpe_per_second"]["translation_m"]["rmse"], ref["rpe_second_t"]),
+        ("RPE/s r", got["rpe_per_second"]["rotation_deg"]["rmse"], ref["rpe_second_r"]),
+    ]
 ok = True
 for name, a, b in pairs:
     good = abs(a - b) <= 1e-6
@@ -51,7 +58,8 @@ for name, a, b in pairs:
     print(f"{name:12s} jpcr {a:.9f} reference {b:.9f} {'ok' if good else 'MISMATCH'}")
 assert got["ate"]["translation_m"]["count"] == ref["ate_pairs"]
 assert got["rpe_per_frame"]["translation_m"]["count"] == ref["rpe_frame_pairs"]
-assert got["rpe_per_second"]["translation_m"]["count"] == ref["rpe_second_pairs"]
+if got["rpe_per_second"] is not None:
+    assert got["rpe_per_second"]["translation_m"]["count"] == ref["rpe_second_pairs"]
 assert got["ate"]["translation_m"]["rmse"] > 0.005, "the injected error must be visible"
 for key in ("ate",):
     assert self_[key]["translation_m"]["rmse"] < 1e-9
