@@ -13,6 +13,7 @@
 
 #include "cli/arguments.hpp"
 #include "cli/dds_options.hpp"
+#include "cli/pipeline_options.hpp"
 #include "cli/pipeline_publisher.hpp"
 #include "cli/stop_signal.hpp"
 #include "jpcr/io/dds/dds_depth_subscriber.hpp"
@@ -56,16 +57,8 @@ int node_main(int argc, char** argv) {
       "  jpcr_dds_echo rt/jpcr/path --timeout 2");
   return cli::run_program("jpcr_node", [&] {
     if (!args.parse(argc, argv)) return 0;
-    const Params params = args.has("params") ? load_params(args.get("params")) : Params{};
-    PipelineParams pipeline = params.pipeline;
-    try {
-      if (args.has("method")) pipeline.method = parse_pipeline_method(args.get("method"));
-    } catch (const InputError& e) {
-      throw cli::UsageError(std::string("--method: ") + e.what());
-    }
-    if (args.has("window")) pipeline.window = args.get_int("window");
-    if (pipeline.window < 2 || pipeline.window > kMaxWindowFrames)
-      throw cli::UsageError("--window must be in [2, " + std::to_string(kMaxWindowFrames) + "]");
+    Params params;
+    PipelineParams pipeline = cli::pipeline_params_from(args, &params);
     const int max_frames = args.get_int("max-frames");
     if (max_frames < 0) throw cli::UsageError("--max-frames must be >= 0");
     const double idle_timeout = args.get_double("idle-timeout");

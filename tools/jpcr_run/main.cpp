@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "cli/arguments.hpp"
+#include "cli/pipeline_options.hpp"
 #include "cli/progress.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/camera_yaml.hpp"
@@ -67,16 +68,8 @@ int run_main(int argc, char** argv) {
       "  jpcr_eval traj --gt seq/groundtruth.txt --est seq_run/trajectory.txt");
   return cli::run_program("jpcr_run", [&] {
     if (!args.parse(argc, argv)) return 0;
-    Params params = args.has("params") ? load_params(args.get("params")) : Params{};
-    PipelineParams pipeline = params.pipeline;
-    try {
-      if (args.has("method")) pipeline.method = parse_pipeline_method(args.get("method"));
-    } catch (const InputError& e) {
-      throw cli::UsageError(std::string("--method: ") + e.what());
-    }
-    if (args.has("window")) pipeline.window = args.get_int("window");
-    if (pipeline.window < 2 || pipeline.window > kMaxWindowFrames)
-      throw cli::UsageError("--window must be in [2, " + std::to_string(kMaxWindowFrames) + "]");
+    Params params;
+    PipelineParams pipeline = cli::pipeline_params_from(args, &params);
     std::optional<CameraIntrinsics> camera;
     if (args.has("config")) camera = load_camera_yaml(args.get("config"));
     const std::unique_ptr<FrameSource> dataset =
