@@ -150,6 +150,24 @@ JPCR_HD Scalar frame_cost(const QuadricT<Scalar>& q, const VertexView& view,
   return cost;
 }
 
+/// The per-frame sums as accumulate_frame_terms / frame_cost compute them, sample by sample:
+/// the sampler of the GPU and of the reference CPU path. The CPU drivers pass a sampler with
+/// the same two calls that vectorises across samples (gathered_frame_terms.hpp).
+template <typename Scalar>
+struct DirectSampler {
+  JPCR_HD void accumulate(const QuadricT<Scalar>& q, const VertexView& view,
+                          const RigidMotion<Scalar>& T, bool with_pose, const PixelOffset* pattern,
+                          int pattern_size, int u, int v, const SampleGate<Scalar>& limits,
+                          FrameTerms<Scalar>& out) const {
+    accumulate_frame_terms(q, view, T, with_pose, pattern, pattern_size, u, v, limits, out);
+  }
+  JPCR_HD Scalar cost(const QuadricT<Scalar>& q, const VertexView& view,
+                      const RigidMotion<Scalar>& T, const PixelOffset* pattern, int pattern_size,
+                      int u, int v, const SampleGate<Scalar>& limits, int& count) const {
+    return frame_cost(q, view, T, pattern, pattern_size, u, v, limits, count);
+  }
+};
+
 /// Projective association (method.md §6): c = T⁻¹ p̄ projected into image j. False when c is
 /// behind the camera, projects outside the image, or image j's depth there differs from c_z by
 /// more than the occlusion threshold.
@@ -210,10 +228,10 @@ struct JointPixelSystem {
 /// Builds the system of the quadric at reference pixel (u, v) (method.md §6/§7) with the
 /// Levenberg damping λ on the diagonal of C_p. Inactive when the frame-1 terms are too few, no
 /// other frame sees it, or C_p is ill-conditioned; an inactive quadric keeps its γ_p.
-template <typename Scalar, int MaxFrames>
+template <typename Scalar, int MaxFrames, typename Sampler>
 JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& w,
                                    int u, int v, const JointTermParams& p, Scalar lambda,
-                                   JointPixelSystem<Scalar, MaxFrames>& sys) {
+                                   Sampler& sampler, JointPixelSystem<Scalar, MaxFrames>& sys) {
   using Matrix6 = Eigen::Matrix<Scalar, 6, 6>;
   const SampleGate<Scalar> limits = SampleGate<Scalar>::at(p.fit, q.center);
   sys.active = false;
@@ -225,8 +243,8 @@ JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowV
   sys.g_gamma.setZero();
   if (p.estimate_quadrics) {  // frame-1 terms: as Quad IT, T = I, no pose
     FrameTerms<Scalar> f1;
-    accumulate_frame_terms(q, w.views[0], RigidMotion<Scalar>{}, false, w.pattern, w.pattern_size,
-                           u, v, limits, f1);
+    sampler.accumulate(q, w.views[0], RigidMotion<Scalar>{}, false, w.pattern, w.pattern_size, u, v,
+                       limits, f1);
     if (f1.count < p.fit.min_samples) return;
     C = f1.C;
     sys.g_gamma = f1.g_gamma;
@@ -238,8 +256,8 @@ JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowV
     int su = 0, sv = 0;
     if (!associate(q.center, w.motions[j + 1], w.views[j + 1], w.camera, p, su, sv)) continue;
     FrameTerms<Scalar> f;
-    accumulate_frame_terms(q, w.views[j + 1], w.motions[j + 1], true, w.pattern, w.pattern_size, su,
-                           sv, limits, f);
+    sampler.accumulate(q, w.views[j + 1], w.motions[j + 1], true, w.pattern, w.pattern_size, su, sv,
+                       limits, f);
     if (f.count < p.min_frame_terms) continue;
     sys.seen[j] = any = true;
     C += f.C;
@@ -272,6 +290,15 @@ JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowV
     }
   }
   sys.active = true;
+}
+
+/// linearize_joint_pixel with the sample-by-sample sums (the GPU and the reference CPU path).
+template <typename Scalar, int MaxFrames>
+JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& w,
+                                   int u, int v, const JointTermParams& p, Scalar lambda,
+                                   JointPixelSystem<Scalar, MaxFrames>& sys) {
+  DirectSampler<Scalar> sampler;
+  linearize_joint_pixel(q, w, u, v, p, lambda, sampler, sys);
 }
 
 /// Adds an active quadric's share to the reduced system (lower triangle of the dense
@@ -318,23 +345,31 @@ JPCR_HD QuadricVector<Scalar> back_substitute(const JointPixelSystem<Scalar, Max
 /// The cost Σ w r² of one quadric over the window, re-associated at the window's poses (the
 /// step test of method.md §6). Frames that see it with fewer than min_frame_terms terms, and the
 /// frame-1 terms in Q-full, are left out as in linearize_joint_pixel.
-template <typename Scalar>
+template <typename Scalar, typename Sampler>
 JPCR_HD Scalar joint_pixel_cost(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& w, int u,
-                                int v, const JointTermParams& p) {
+                                int v, const JointTermParams& p, Sampler& sampler) {
   const SampleGate<Scalar> limits = SampleGate<Scalar>::at(p.fit, q.center);
   Scalar cost = 0;
   int count = 0;
   if (p.estimate_quadrics)
-    cost += frame_cost(q, w.views[0], RigidMotion<Scalar>{}, w.pattern, w.pattern_size, u, v,
-                       limits, count);
+    cost += sampler.cost(q, w.views[0], RigidMotion<Scalar>{}, w.pattern, w.pattern_size, u, v,
+                         limits, count);
   for (int j = 1; j < w.frames; ++j) {
     int su = 0, sv = 0;
     if (!associate(q.center, w.motions[j], w.views[j], w.camera, p, su, sv)) continue;
     const Scalar c =
-        frame_cost(q, w.views[j], w.motions[j], w.pattern, w.pattern_size, su, sv, limits, count);
+        sampler.cost(q, w.views[j], w.motions[j], w.pattern, w.pattern_size, su, sv, limits, count);
     if (count >= p.min_frame_terms) cost += c;
   }
   return cost;
+}
+
+/// joint_pixel_cost with the sample-by-sample sums.
+template <typename Scalar>
+JPCR_HD Scalar joint_pixel_cost(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& w, int u,
+                                int v, const JointTermParams& p) {
+  DirectSampler<Scalar> sampler;
+  return joint_pixel_cost(q, w, u, v, p, sampler);
 }
 
 }  // namespace jpcr

@@ -4,6 +4,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "jpcr/backend/gathered_frame_terms.hpp"
 #include "jpcr/backend/joint_params.hpp"
 
 namespace jpcr {
@@ -36,28 +37,18 @@ struct ReductionShare {
 // number of valid quadrics per row varies.
 constexpr int kRowChunk = 4;
 
-// The per-row loops are compiled twice on x86-64 GCC, for AVX2 + FMA (x86-64-v3) and for the
-// baseline, chosen at load time (function multi-versioning); `flatten` inlines the kernels into
-// each clone. Eigen's type layout is the translation unit's either way, so the clones share one
-// ABI (a whole translation unit built with -mavx2 would not).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
-#define JPCR_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default"), flatten))
-#else
-#define JPCR_SIMD_CLONES
-#endif
-
 // Row v of the reference frame: each active quadric's share of the reduced system; with
 // keep_factors (M = 2) also its back-substitution factors.
-template <int MaxFrames>
+template <int MaxFrames, typename Sampler>
 void linearize_row(const JointState& state, const JointWindowView<double>& window,
                    const JointTermParams& p, double lambda, int v, int width, bool keep_factors,
-                   ReductionShare& share) {
+                   Sampler& sampler, ReductionShare& share) {
   JointPixelSystem<double, MaxFrames> sys;
   const int M = window.frames;
   for (int u = 0; u < width; ++u) {
     const std::size_t i = static_cast<std::size_t>(v) * width + u;
     if (!state.valid[i]) continue;
-    linearize_joint_pixel(state.quadrics[i], window, u, v, p, lambda, sys);
+    linearize_joint_pixel(state.quadrics[i], window, u, v, p, lambda, sampler, sys);
     if (!sys.active) continue;
     add_schur_terms(sys, M, p.estimate_quadrics, share.S.data(), share.s.data(),
                     share.A_diagonal.data());
@@ -73,76 +64,58 @@ void linearize_row(const JointState& state, const JointWindowView<double>& windo
 
 // Row v, recomputing each active quadric's system: its back-substitution and its cost at the
 // candidate (windows of M > 2).
-template <int MaxFrames>
+template <int MaxFrames, typename Sampler>
 double step_row(const JointState& state, const JointWindowView<double>& window,
                 const JointWindowView<double>& next, const JointTermParams& p, double lambda,
-                const Vector6d* pose_steps, int v, int width, JointStep& out) {
+                const Vector6d* pose_steps, int v, int width, Sampler& sampler, JointStep& out) {
   JointPixelSystem<double, MaxFrames> sys;
   double cost = 0.0;
   for (int u = 0; u < width; ++u) {
     const std::size_t i = static_cast<std::size_t>(v) * width + u;
     if (!state.valid[i]) continue;
-    linearize_joint_pixel(state.quadrics[i], window, u, v, p, lambda, sys);
+    linearize_joint_pixel(state.quadrics[i], window, u, v, p, lambda, sampler, sys);
     if (!sys.active) continue;
     Quadricd& q = out.candidate.quadrics[i];
     if (p.estimate_quadrics) {
       out.quadric_steps[i] = back_substitute(sys, window.frames, pose_steps);
       apply_quadric_update(q, out.quadric_steps[i]);
     }
-    cost += joint_pixel_cost(q, next, u, v, p);
+    cost += joint_pixel_cost(q, next, u, v, p, sampler);
   }
   return cost;
 }
 
 // J-ftf's step from the kept factors: Δγ_p = k − K Δξ, then the candidate's cost.
+template <typename Sampler>
 double step_factors(const PairFactors& f, const JointWindowView<double>& next,
                     const JointTermParams& p, const Vector6d& pose_step, int width,
-                    JointStep& out) {
+                    Sampler& sampler, JointStep& out) {
   Quadricd& q = out.candidate.quadrics[f.pixel];
   out.quadric_steps[f.pixel] = f.k - f.K * pose_step;
   apply_quadric_update(q, out.quadric_steps[f.pixel]);
   const int u = static_cast<int>(f.pixel % width), v = static_cast<int>(f.pixel / width);
-  return joint_pixel_cost(q, next, u, v, p);
+  return joint_pixel_cost(q, next, u, v, p, sampler);
 }
 
-// The instantiations the drivers run: J-ftf (M = 2) and a window of up to kMaxWindowFrames.
-JPCR_SIMD_CLONES void linearize_row_pair(const JointState& state,
-                                         const JointWindowView<double>& window,
-                                         const JointTermParams& p, double lambda, int v, int width,
-                                         ReductionShare& share) {
-  linearize_row<2>(state, window, p, lambda, v, width, p.estimate_quadrics, share);
-}
-JPCR_SIMD_CLONES void linearize_row_window(const JointState& state,
-                                           const JointWindowView<double>& window,
-                                           const JointTermParams& p, double lambda, int v,
-                                           int width, ReductionShare& share) {
-  linearize_row<kMaxWindowFrames>(state, window, p, lambda, v, width, false, share);
-}
-JPCR_SIMD_CLONES double step_row_window(const JointState& state,
-                                        const JointWindowView<double>& window,
-                                        const JointWindowView<double>& next,
-                                        const JointTermParams& p, double lambda,
-                                        const Vector6d* pose_steps, int v, int width,
-                                        JointStep& out) {
-  return step_row<kMaxWindowFrames>(state, window, next, p, lambda, pose_steps, v, width, out);
-}
-JPCR_SIMD_CLONES double fixed_cost_clone(const Quadricd& q, const JointWindowView<double>& next,
-                                         const JointTermParams& p, std::size_t pixel, int width) {
-  return joint_pixel_cost(q, next, static_cast<int>(pixel % width), static_cast<int>(pixel / width),
-                          p);
-}
-JPCR_SIMD_CLONES double step_factors_clone(const PairFactors& f,
-                                           const JointWindowView<double>& next,
-                                           const JointTermParams& p, const Vector6d& pose_step,
-                                           int width, JointStep& out) {
-  return step_factors(f, next, p, pose_step, width, out);
+// The sums per frame: gathered and vectorised across samples (the default), or sample by sample
+// as the GPU runs them (the reference, for tests). Each thread owns one sampler.
+template <typename Body>
+void with_sampler(JointSampling sampling, int pattern_size, Body&& body) {
+  if (sampling == JointSampling::kReference) {
+    DirectSampler<double> sampler;
+    body(sampler);
+  } else {
+    GatheredSampler<float> sampler(pattern_size);
+    body(sampler);
+  }
 }
 
 }  // namespace
 
 JointSystem::JointSystem(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
-                         const NeighbourhoodPattern& pattern, const JointTermParams& params)
-    : pattern_(pattern.offsets), params_(params) {
+                         const NeighbourhoodPattern& pattern, const JointTermParams& params,
+                         JointSampling sampling)
+    : pattern_(pattern.offsets), params_(params), sampling_(sampling) {
   for (const VertexMap& f : frames)
     views_.push_back(VertexView{f.data(), f.width(), f.height()});
   camera_ = PinholeProjection{camera.fx, camera.fy, camera.cx, camera.cy};
@@ -160,13 +133,17 @@ ReducedSystem JointSystem::linearize(const JointState& state, double lambda) con
 #pragma omp parallel
   {
     ReductionShare share(n, M - 1);
+    with_sampler(sampling_, window.pattern_size, [&](auto& sampler) {
 #pragma omp for schedule(dynamic, kRowChunk) nowait
-    for (int v = 0; v < height_; ++v) {
-      if (M == 2)
-        linearize_row_pair(state, window, params_, lambda, v, width_, share);
-      else
-        linearize_row_window(state, window, params_, lambda, v, width_, share);
-    }
+      for (int v = 0; v < height_; ++v) {
+        if (M == 2)
+          linearize_row<2>(state, window, params_, lambda, v, width_, params_.estimate_quadrics,
+                           sampler, share);
+        else
+          linearize_row<kMaxWindowFrames>(state, window, params_, lambda, v, width_, false, sampler,
+                                          share);
+      }
+    });
 #pragma omp critical(jpcr_joint_reduce)
     {
       for (std::size_t k = 0; k < total.S.size(); ++k)
@@ -223,10 +200,13 @@ JointStep JointSystem::step_pair(const JointState& state, const ReducedSystem& s
                                      pattern_.data(), static_cast<int>(pattern_.size())};
   const long count = static_cast<long>(system.factors.size());
   double cost = 0.0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : cost)
-  for (long k = 0; k < count; ++k)
-    cost += step_factors_clone(system.factors[static_cast<std::size_t>(k)], next, params_,
-                               pose_steps[0], width_, out);
+#pragma omp parallel reduction(+ : cost)
+  with_sampler(sampling_, next.pattern_size, [&](auto& sampler) {
+#pragma omp for schedule(dynamic, 256)
+    for (long k = 0; k < count; ++k)
+      cost += step_factors(system.factors[static_cast<std::size_t>(k)], next, params_,
+                           pose_steps[0], width_, sampler, out);
+  });
   out.cost = cost;
   return out;
 }
@@ -240,11 +220,15 @@ JointStep JointSystem::step_fixed(const JointState& state, const ReducedSystem& 
                                      pattern_.data(), static_cast<int>(pattern_.size())};
   const long count = static_cast<long>(system.fixed_active.size());
   double cost = 0.0;
-#pragma omp parallel for schedule(dynamic, 256) reduction(+ : cost)
-  for (long k = 0; k < count; ++k) {
-    const std::size_t i = system.fixed_active[static_cast<std::size_t>(k)];
-    cost += fixed_cost_clone(state.quadrics[i], next, params_, i, width_);
-  }
+#pragma omp parallel reduction(+ : cost)
+  with_sampler(sampling_, next.pattern_size, [&](auto& sampler) {
+#pragma omp for schedule(dynamic, 256)
+    for (long k = 0; k < count; ++k) {
+      const std::size_t i = system.fixed_active[static_cast<std::size_t>(k)];
+      cost += joint_pixel_cost(state.quadrics[i], next, static_cast<int>(i % width_),
+                               static_cast<int>(i / width_), params_, sampler);
+    }
+  });
   out.cost = cost;
   return out;
 }
@@ -260,10 +244,13 @@ JointStep JointSystem::step_window(const JointState& state, double lambda,
   const JointWindowView<double> next{views_.data(), moved.data(),    M,
                                      camera_,       pattern_.data(), pattern_size};
   double cost = 0.0;
-#pragma omp parallel for schedule(dynamic, kRowChunk) reduction(+ : cost)
-  for (int v = 0; v < height_; ++v)
-    cost +=
-        step_row_window(state, window, next, params_, lambda, pose_steps.data(), v, width_, out);
+#pragma omp parallel reduction(+ : cost)
+  with_sampler(sampling_, pattern_size, [&](auto& sampler) {
+#pragma omp for schedule(dynamic, kRowChunk)
+    for (int v = 0; v < height_; ++v)
+      cost += step_row<kMaxWindowFrames>(state, window, next, params_, lambda, pose_steps.data(), v,
+                                         width_, sampler, out);
+  });
   out.cost = cost;
   return out;
 }

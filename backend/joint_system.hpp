@@ -55,11 +55,17 @@ struct JointStep {
   double cost = 0.0;  // Σ w r² at the candidate over the quadrics active in the linearisation
 };
 
+/// How the CPU evaluates each quadric's per-frame sums: gathered into contiguous arrays and
+/// vectorised across samples in float lanes (gathered_frame_terms.hpp; the default), or sample
+/// by sample in double exactly as the GPU kernels do (the reference the tests compare with).
+enum class JointSampling { kGathered, kReference };
+
 class JointSystem {
  public:
   /// frames[0] is the reference; all frames share `camera` (sizes are checked by the caller).
   JointSystem(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
-              const NeighbourhoodPattern& pattern, const JointTermParams& params);
+              const NeighbourhoodPattern& pattern, const JointTermParams& params,
+              JointSampling sampling = JointSampling::kGathered);
 
   int frames() const { return static_cast<int>(views_.size()); }
   const JointTermParams& params() const { return params_; }
@@ -93,6 +99,7 @@ class JointSystem {
   PinholeProjection camera_;
   std::vector<PixelOffset> pattern_;
   JointTermParams params_;
+  JointSampling sampling_ = JointSampling::kGathered;
   int width_ = 0, height_ = 0;
 };
 

@@ -44,11 +44,13 @@ Window make_window(int width, int frames) {
   return w;
 }
 
-void run(benchmark::State& state, bool estimate_quadrics) {
+void run(benchmark::State& state, bool estimate_quadrics,
+         jpcr::JointSampling sampling = jpcr::JointSampling::kGathered) {
   const Window w = make_window(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const jpcr::JointParams params;
   const jpcr::NeighbourhoodPattern pattern = params.quadric.pattern.for_width(w.camera.width);
-  const jpcr::JointSystem system(w.vertices, w.camera, pattern, params.terms(estimate_quadrics));
+  const jpcr::JointSystem system(w.vertices, w.camera, pattern, params.terms(estimate_quadrics),
+                                 sampling);
   int active = 0;
   for (auto _ : state) {
     const jpcr::ReducedSystem lin = system.linearize(w.state, params.initial_damping);
@@ -68,6 +70,11 @@ void run(benchmark::State& state, bool estimate_quadrics) {
 void BM_JointFrameToFrameIteration(benchmark::State& state) {
   run(state, true);
 }
+// The same iteration with the per-sample reference sums (what the GPU kernels run): the speed-up
+// of the gathered SIMD sums on this CPU.
+void BM_JointFrameToFrameIterationReference(benchmark::State& state) {
+  run(state, true, jpcr::JointSampling::kReference);
+}
 void BM_JointWindowIteration(benchmark::State& state) {
   run(state, true);
 }
@@ -76,6 +83,11 @@ void BM_FixedQuadricIteration(benchmark::State& state) {
 }
 
 BENCHMARK(BM_JointFrameToFrameIteration)
+    ->Args({320, 2})
+    ->Args({640, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_JointFrameToFrameIterationReference)
     ->Args({320, 2})
     ->Args({640, 2})
     ->Unit(benchmark::kMillisecond)
