@@ -1,6 +1,8 @@
 #include "jpcr/backend/gathered_frame_terms.hpp"
 
 #include <algorithm>
+#include <cstdlib>
+#include <cstring>
 
 // Compiled for AVX2 + FMA and for the baseline, chosen at load time (as quadric_fit.cpp).
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
@@ -54,15 +56,38 @@ int GatheredFrameTerms<Lane>::gather(const VertexView& view, const RigidMotion<d
                                      const Eigen::Vector3d& centre) {
   float *qx = raw_.data(), *qy = qx + capacity_, *qz = qy + capacity_;
   int n = 0;
-  for (int k = 0; k < pattern_size; ++k) {
-    const int su = u + pattern[k].du, sv = v + pattern[k].dv;
-    if (!view.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
-    const Eigen::Vector3f& Q = view(su, sv);
-    if (!is_finite_value(Q.z())) continue;
-    qx[n] = Q.x();
-    qy[n] = Q.y();
-    qz[n] = Q.z();
-    ++n;
+  if (pattern != pattern_ || view.width != pattern_width_) {  // once per pattern and image width
+    reach_ = 0;
+    linear_.resize(static_cast<std::size_t>(pattern_size));
+    for (int k = 0; k < pattern_size; ++k) {
+      reach_ = std::max({reach_, std::abs(pattern[k].du), std::abs(pattern[k].dv)});
+      linear_[k] = static_cast<std::ptrdiff_t>(pattern[k].dv) * view.width + pattern[k].du;
+    }
+    pattern_ = pattern;
+    pattern_width_ = view.width;
+  }
+  const Eigen::Vector3f* row = view.data + static_cast<std::ptrdiff_t>(v) * view.width + u;
+  if (u >= reach_ && v >= reach_ && u + reach_ < view.width && v + reach_ < view.height) {
+    // The whole pattern is in the image: no bounds checks, and a branch-free compaction (each
+    // point is written, the count advances only past finite ones).
+    for (int k = 0; k < pattern_size; ++k) {
+      const Eigen::Vector3f& Q = row[linear_[k]];
+      qx[n] = Q.x();
+      qy[n] = Q.y();
+      qz[n] = Q.z();
+      n += is_finite_value(Q.z()) ? 1 : 0;
+    }
+  } else {
+    for (int k = 0; k < pattern_size; ++k) {
+      const int su = u + pattern[k].du, sv = v + pattern[k].dv;
+      if (!view.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
+      const Eigen::Vector3f& Q = view(su, sv);
+      if (!is_finite_value(Q.z())) continue;
+      qx[n] = Q.x();
+      qy[n] = Q.y();
+      qz[n] = Q.z();
+      ++n;
+    }
   }
   // d = R Q + (t − p̄): the large translation cancels in double before the lanes see it.
   const Eigen::Vector3d offset = T.t - centre;
@@ -142,19 +167,67 @@ JPCR_SIMD_CLONES void gated_costs(const QuadricScalars<Lane>& qs, const Lane* __
   count = static_cast<int>(count_sum);
 }
 
-// Y = Σ √w(y, r) √w(y, r)ᵀ over the first `cols` columns: dot products along the samples,
-// kLanes partial sums each.
+// A register of lanes (GCC/Clang vector extension; the baseline clone splits it in two).
+template <typename Lane>
+struct LaneVector {
+  typedef Lane type __attribute__((vector_size(32)));
+};
+
+// Unaligned load of one register (by reference: a 32-byte vector is never passed by value,
+// its ABI differs between the AVX and baseline clones).
+template <typename Vec, typename Lane>
+inline void load_lanes(Vec& x, const Lane* p) {
+  std::memcpy(&x, p, sizeof(Vec));
+}
+
+// Y = Σ √w(y, r) √w(y, r)ᵀ over the first `cols` columns: dot products along the samples (n is
+// a multiple of kLanes), four at a time so that each load of column a serves four products.
 template <typename Lane, int kLanes>
 JPCR_SIMD_CLONES void column_products(const Lane* columns, int n, int stride, int cols, double* Y) {
+  using Vec = typename LaneVector<Lane>::type;
+  static_assert(sizeof(Vec) == kLanes * sizeof(Lane), "one register of lanes");
+  const auto col = [columns, stride](int c) {
+    return columns + static_cast<std::size_t>(c) * stride;
+  };
+  const auto total = [](const Vec& t) {
+    double sum = 0.0;
+    for (int lane = 0; lane < kLanes; ++lane)
+      sum += t[lane];
+    return sum;
+  };
   for (int a = 0; a < cols; ++a) {
-    const Lane* ca = columns + static_cast<std::size_t>(a) * stride;
-    for (int b = 0; b <= a; ++b) {
-      const Lane* cb = columns + static_cast<std::size_t>(b) * stride;
-      Lane t = 0;
-#pragma omp simd simdlen(kLanes) reduction(+ : t)
-      for (int k = 0; k < n; ++k)
-        t += ca[k] * cb[k];
-      Y[a * 10 + b] = Y[b * 10 + a] = t;
+    const Lane* ca = col(a);
+    int b = 0;
+    for (; b + 3 <= a; b += 4) {
+      const Lane *c0 = col(b), *c1 = col(b + 1), *c2 = col(b + 2), *c3 = col(b + 3);
+      Vec t0 = {}, t1 = {}, t2 = {}, t3 = {};
+      for (int k = 0; k < n; k += kLanes) {
+        Vec x, y0, y1, y2, y3;
+        load_lanes(x, ca + k);
+        load_lanes(y0, c0 + k);
+        load_lanes(y1, c1 + k);
+        load_lanes(y2, c2 + k);
+        load_lanes(y3, c3 + k);
+        t0 += x * y0;
+        t1 += x * y1;
+        t2 += x * y2;
+        t3 += x * y3;
+      }
+      Y[a * 10 + b] = Y[b * 10 + a] = total(t0);
+      Y[a * 10 + b + 1] = Y[(b + 1) * 10 + a] = total(t1);
+      Y[a * 10 + b + 2] = Y[(b + 2) * 10 + a] = total(t2);
+      Y[a * 10 + b + 3] = Y[(b + 3) * 10 + a] = total(t3);
+    }
+    for (; b <= a; ++b) {
+      const Lane* cb = col(b);
+      Vec t = {};
+      for (int k = 0; k < n; k += kLanes) {
+        Vec x, y;
+        load_lanes(x, ca + k);
+        load_lanes(y, cb + k);
+        t += x * y;
+      }
+      Y[a * 10 + b] = Y[b * 10 + a] = total(t);
     }
   }
 }

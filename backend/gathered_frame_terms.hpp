@@ -17,6 +17,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <vector>
 
 #include <Eigen/Core>
@@ -57,6 +58,10 @@ class GatheredFrameTerms {
   Lane* column(int i) { return columns_.data() + static_cast<std::size_t>(i) * capacity_; }
 
   int capacity_ = 0;
+  const PixelOffset* pattern_ = nullptr;  // the pattern reach_ and linear_ describe
+  int pattern_width_ = 0;                 // at this image width
+  int reach_ = 0;                         // max |du|, |dv|
+  std::vector<std::ptrdiff_t> linear_;    // dv · width + du per offset
   int n_ = 0;                  // gathered samples, padded to a multiple of kLanes with mask 0
   std::vector<float> raw_;     // the gathered points Q (x, y, z arrays)
   std::vector<Lane> samples_;  // dx dy dz d² mask
