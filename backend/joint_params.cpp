@@ -17,6 +17,7 @@ void JointParams::validate() const {
     throw InputError("min_pivot_ratio: must be in (0, 1)");
   if (!(initial_damping > 0.0)) throw InputError("initial_damping: must be > 0");
   if (!(damping_factor > 1.0)) throw InputError("damping_factor: must be > 1");
+  if (!(damping_decrease > 1.0)) throw InputError("damping_decrease: must be > 1");
   if (!(max_damping > initial_damping))
     throw InputError("max_damping: must exceed initial_damping");
   if (min_active_quadrics < 1) throw InputError("min_active_quadrics: must be at least 1");

@@ -24,9 +24,12 @@ struct JointParams {
   int min_frame_terms = 10;             // terms a frame j needs for its association to count
   double min_pivot_ratio = 1e-8;        // C_p ill-conditioned below it (joint_pixel_kernel.hpp)
   double initial_damping = 1e-4;        // λ: relative Levenberg damping of diag A and diag C_p
-  double damping_factor = 10.0;  // λ ← λ·f after a rejected step, λ/f after an accepted one
-  double max_damping = 1e6;      // λ above it: the cost cannot be lowered → diverged
-  int min_active_quadrics = 50;  // fewer quadrics seen in another frame: too_few_quadrics
+  double damping_factor = 10.0;         // λ ← λ·f after a rejected step ...
+  double damping_decrease = 3.0;  // ... and λ ← λ/d after an accepted one (d < f: λ settles
+                                  // near the smallest damping that works instead of bouncing
+                                  // between two values with every other step rejected)
+  double max_damping = 1e6;       // λ above it: the cost cannot be lowered → diverged
+  int min_active_quadrics = 50;   // fewer quadrics seen in another frame: too_few_quadrics
 
   /// The per-pixel part, as the kernels receive it.
   JointTermParams terms(bool estimate_quadrics) const {

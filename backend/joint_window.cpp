@@ -137,7 +137,7 @@ RefinementResult refine_window(const std::vector<VertexMap>& vertices,
       if (std::isfinite(step.cost) && step.cost <= lin.cost) {  // accept
         state = std::move(step.candidate);
         ++report.iterations;
-        lambda = std::max(lambda / params.damping_factor, 1e-12);
+        lambda = std::max(lambda / params.damping_decrease, 1e-12);
         lin = system.linearize(state, lambda);
         report.cost.push_back(lin.cost);
         if (too_few(lin, params))

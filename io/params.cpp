@@ -174,6 +174,7 @@ void read_joint(YamlSection yaml, JointParams& p) {
   yaml.read("min_pivot_ratio", p.min_pivot_ratio);
   yaml.read("initial_damping", p.initial_damping);
   yaml.read("damping_factor", p.damping_factor);
+  yaml.read("damping_decrease", p.damping_decrease);
   yaml.read("max_damping", p.max_damping);
   yaml.read("min_active_quadrics", p.min_active_quadrics);
   yaml.finish();
