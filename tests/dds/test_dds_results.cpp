@@ -176,10 +176,13 @@ TEST_F(DdsResults, KeyframeMessageRoundTrips) {
   frame.depth(3, 4) = 0.0f;
   Matrix6d cov = Matrix6d::Identity() * 1e-3;
   cov(0, 5) = 2e-5;
-  const KeyframeMessage message(frame, some_pose(7.5), cov, DepthEncoding::kMetres32, "map", "cam");
+  const Trajectory tracked = {some_pose(6.5), some_pose(7.0)};
+  const KeyframeMessage message(frame, some_pose(7.5), cov, DepthEncoding::kMetres32, "map", "cam",
+                                9, tracked);
   writer.write(message.message());
   const auto got = take_one(reader, [](const RosKeyframe& m) { return decode_keyframe(m, {}); });
   ASSERT_TRUE(got);
+  EXPECT_FALSE(got->end_of_stream);
   EXPECT_EQ(got->frame.timestamp, 7.5);
   EXPECT_EQ(got->frame.camera.fx, frame.camera.fx);
   EXPECT_EQ(got->frame.camera.width, 32);
@@ -187,6 +190,20 @@ TEST_F(DdsResults, KeyframeMessageRoundTrips) {
     ASSERT_EQ(got->frame.depth[i], frame.depth[i]);
   expect_same_pose(got->pose.pose, some_pose(7.5).pose);
   EXPECT_EQ(got->covariance, cov);
+  EXPECT_EQ(got->frame_index, 9);
+  ASSERT_EQ(got->tracked.size(), 2u);
+  EXPECT_EQ(got->tracked[1].timestamp, 7.0);
+  expect_same_pose(got->tracked[1].pose, tracked[1].pose);
+
+  // The end-of-stream marker: the frames after the last keyframe, no depth.
+  const KeyframeMessage end(12, {some_pose(8.0)}, "map");
+  writer.write(end.message());
+  const auto last = take_one(reader, [](const RosKeyframe& m) { return decode_keyframe(m, {}); });
+  ASSERT_TRUE(last);
+  EXPECT_TRUE(last->end_of_stream);
+  EXPECT_EQ(last->frame_index, 12);
+  ASSERT_EQ(last->tracked.size(), 1u);
+  EXPECT_EQ(last->tracked[0].timestamp, 8.0);
 }
 
 TEST(DdsParticipant, BadDomainIdIsAnError) {
