@@ -125,7 +125,7 @@ int DdsDepthSubscriber::matched() const {
 
 std::size_t DdsDepthSubscriber::frames_dropped() const {
   const std::lock_guard<std::mutex> lock(state_->mutex);
-  return state_->dropped;
+  return state_->dropped + lost_;
 }
 
 void DdsDepthSubscriber::reject(const std::string& topic, const std::string& problem) {
@@ -178,6 +178,15 @@ void DdsDepthSubscriber::process() {
     } catch (const InputError& e) {
       reject(config_.depth_topic, e.what());
     }
+  }
+  // Samples Cyclone itself knows it lost on the way (e.g. gone from the writer's history before
+  // a retransmission): counted as dropped too.
+  dds_sample_lost_status_t lost{};
+  if (dds_get_sample_lost_status(s.depth.handle(), &lost) == DDS_RETCODE_OK &&
+      lost.total_count > lost_) {
+    *log_ << "jpcr dds: " << config_.depth_topic << ": " << lost.total_count - lost_
+          << " frame(s) lost in transport, " << lost.total_count << " in all" << std::endl;
+    lost_ = lost.total_count;
   }
   if (dropped > dropped_logged_) {
     *log_ << "jpcr dds: " << config_.depth_topic << ": dropped " << dropped - dropped_logged_

@@ -11,6 +11,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <iosfwd>
 #include <memory>
 #include <optional>
@@ -38,7 +39,8 @@ class DdsDepthSubscriber {
 
   std::size_t frames_received() const { return frames_; }
   std::size_t samples_rejected() const { return rejected_; }
-  /// Depth images dropped from the full queue before the caller asked for them.
+  /// Depth images dropped from the full queue before the caller asked for them, plus those
+  /// Cyclone reports lost in transport (sample lost status).
   std::size_t frames_dropped() const;
   /// Publishers matched on the depth topic.
   int matched() const;
@@ -54,6 +56,7 @@ class DdsDepthSubscriber {
   std::size_t frames_ = 0;
   std::size_t rejected_ = 0;
   std::size_t dropped_logged_ = 0;
+  std::uint32_t lost_ = 0;
 };
 
 }  // namespace jpcr
