@@ -36,7 +36,6 @@ class PipelinePublisher {
 
   bool flush(std::chrono::milliseconds timeout) const { return publisher_.flush(timeout); }
   std::size_t keyframes_published() const { return keyframes_published_; }
-  DdsResultPublisher& results() { return publisher_; }
 
  private:
   DdsResultPublisher publisher_;
