@@ -2,220 +2,35 @@
 
 #include <chrono>
 
-#include "jpcr/quadric/error.hpp"
-#include "jpcr/quadric/quadric_fit.hpp"
-
 namespace jpcr {
 
-namespace {
+PipelineFrontEnd::PipelineFrontEnd(const PipelineParams& params)
+    : method_(params.method), tracker_(params.frontend) {}
 
-using Clock = std::chrono::steady_clock;
-
-double ms_since(Clock::time_point t0) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
-// A refinement whose poses can be used: converged, or still improving at the iteration cap.
-bool usable(const RefinementResult& r) {
-  if (r.report.verdict != RefinementVerdict::kConverged &&
-      r.report.verdict != RefinementVerdict::kMaxIterations)
-    return false;
-  for (const Eigen::Isometry3d& T : r.poses)
-    if (!T.matrix().allFinite()) return false;
-  return true;
-}
-
-}  // namespace
-
-/// The keyframes the back end still works on: the current J-full window (or the last pair), with
-/// the best quadrics each has so far.
-struct KeyframePipeline::Window {
-  std::vector<Frame> frames;
-  std::vector<int> keyframes;        // indices into keyframes_
-  std::vector<QuadricMap> quadrics;  // per slot; empty map = none yet
-  void pop_front() {
-    frames.erase(frames.begin());
-    keyframes.erase(keyframes.begin());
-    quadrics.erase(quadrics.begin());
-  }
-};
-
-const char* to_string(PipelineMethod method) {
-  switch (method) {
-    case PipelineMethod::kIcpFtf:
-      return "icp-ftf";
-    case PipelineMethod::kJointFtf:
-      return "j-ftf";
-    case PipelineMethod::kJointFull:
-      return "j-full";
-    case PipelineMethod::kFixedQuadrics:
-      return "q-full";
-    case PipelineMethod::kPipeline:
-      return "pipeline";
-  }
-  return "?";
-}
-
-PipelineMethod parse_pipeline_method(const std::string& name) {
-  for (PipelineMethod m :
-       {PipelineMethod::kIcpFtf, PipelineMethod::kJointFtf, PipelineMethod::kJointFull,
-        PipelineMethod::kFixedQuadrics, PipelineMethod::kPipeline})
-    if (name == to_string(m)) return m;
-  throw InputError("unknown method '" + name +
-                   "' (choices: icp-ftf, j-ftf, j-full, q-full, pipeline)");
-}
-
-void PipelineParams::validate() const {
-  if (window < 2 || window > kMaxWindowFrames)
-    throw InputError("window: must be in [2, " + std::to_string(kMaxWindowFrames) + "] keyframes");
-  frontend.validate();
-  joint.validate();
-}
-
-KeyframePipeline::KeyframePipeline(const PipelineParams& params, CurvatureSink sink)
-    : params_(params),
-      sink_(std::move(sink)),
-      tracker_(params.frontend),
-      window_(std::make_unique<Window>()) {
-  params_.validate();
-  const PipelineMethod m = params_.method;
-  if (m == PipelineMethod::kJointFtf || m == PipelineMethod::kPipeline)
-    pair_refiner_ = make_refiner("j-ftf", params_.joint);
-  if (m == PipelineMethod::kJointFull || m == PipelineMethod::kPipeline)
-    window_refiner_ = make_refiner("j-full", params_.joint);
-  if (m == PipelineMethod::kFixedQuadrics) window_refiner_ = make_refiner("q-full", params_.joint);
-}
-
-KeyframePipeline::~KeyframePipeline() = default;
-
-const PipelineFrame& KeyframePipeline::add(const Frame& frame) {
+PipelineFrame PipelineFrontEnd::track(const Frame& frame, bool* keyframe) {
+  using Clock = std::chrono::steady_clock;
   const Clock::time_point t0 = Clock::now();
   const TrackResult track = tracker_.track(frame);
   PipelineFrame f;
   f.index = track.index;
   f.front_end = track.T_wc;
-  f.icp_verdict = frames_.empty() ? IcpVerdict::ok : track.icp.verdict;
+  const bool first = track.index == 0;
+  f.icp_verdict = first ? IcpVerdict::ok : track.icp.verdict;
   f.kept_last_motion = track.kept_last_motion;
-  if (!frames_.empty()) f.icp_covariance = track.icp.covariance;
-  f.track_ms = ms_since(t0);
+  if (!first) f.icp_covariance = track.icp.covariance;
+  f.track_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   // The single methods refine every consecutive frame; the pipeline follows the front end.
-  const bool keyframe =
-      keyframes_.empty() || track.is_keyframe || params_.method != PipelineMethod::kPipeline;
-  if (keyframe) on_keyframe(frame, track);
-  f.keyframe = static_cast<int>(keyframes_.size()) - 1;
-  frames_.push_back(f);
-  return frames_.back();
+  *keyframe = first || track.is_keyframe || method_ != PipelineMethod::kPipeline;
+  return f;
 }
 
-void KeyframePipeline::on_keyframe(const Frame& frame, const TrackResult& track) {
-  PipelineKeyframe k;
-  k.frame = track.index;
-  k.front_end = k.refined = track.T_wc;
-  if (!keyframes_.empty()) {
-    // Until the back end says otherwise, the keyframe moves by the front end's motion from the
-    // previous keyframe, applied to that keyframe's refined pose.
-    const PipelineKeyframe& previous = keyframes_.back();
-    k.refined.pose = previous.refined.pose * (previous.front_end.pose.inverse() * track.T_wc.pose);
-  }
-  keyframes_.push_back(k);
-  if (!pair_refiner_ && !window_refiner_) return;  // ICP-ftf: nothing to refine or keep
-  window_->frames.push_back(frame);
-  window_->keyframes.push_back(static_cast<int>(keyframes_.size()) - 1);
-  window_->quadrics.emplace_back();
-  if (pair_refiner_ && window_->frames.size() >= 2) refine_pair();
-  if (window_refiner_ && static_cast<int>(window_->frames.size()) == params_.window) {
-    refine_window();
-  } else if (!window_refiner_ && window_->frames.size() >= 2) {
-    emit_curvature(0, window_->quadrics[0]);  // J-ftf only: the older keyframe of the pair is done
-    window_->pop_front();
-  }
-}
+KeyframePipeline::KeyframePipeline(const PipelineParams& params, CurvatureSink sink)
+    : PipelineBackEnd(params, std::move(sink)), front_end_(params) {}
 
-// J-ftf between the last two keyframes of the window (method.md §6).
-void KeyframePipeline::refine_pair() {
-  const Clock::time_point t0 = Clock::now();
-  const std::size_t n = window_->frames.size();
-  PipelineKeyframe& a = keyframes_[window_->keyframes[n - 2]];
-  PipelineKeyframe& b = keyframes_[window_->keyframes[n - 1]];
-  const Eigen::Isometry3d initial = a.refined.pose.inverse() * b.refined.pose;
-  const RefinementResult r =
-      pair_refiner_->refine(std::vector<Frame>{window_->frames[n - 2], window_->frames[n - 1]},
-                            {Eigen::Isometry3d::Identity(), initial});
-  b.pair = r.report;
-  if (usable(r)) {
-    b.refined.pose = a.refined.pose * r.poses[1];
-    window_->quadrics[n - 2] = r.quadrics;
-  } else {
-    b.used_front_end = true;
-  }
-  b.refine_ms += ms_since(t0);
-}
-
-// J-full (or Q-full) over the window; its first keyframe is the gauge (method.md §7, §8).
-void KeyframePipeline::refine_window() {
-  const Clock::time_point t0 = Clock::now();
-  const std::size_t n = window_->frames.size();
-  const PipelineKeyframe& first = keyframes_[window_->keyframes[0]];
-  std::vector<Eigen::Isometry3d> initial;
-  for (int k : window_->keyframes)
-    initial.push_back(first.refined.pose.inverse() * keyframes_[k].refined.pose);
-  const RefinementResult r = window_refiner_->refine(window_->frames, initial);
-  PipelineKeyframe& last = keyframes_[window_->keyframes[n - 1]];
-  last.window = r.report;
-  if (usable(r)) {
-    const Eigen::Isometry3d anchor = first.refined.pose;
-    for (std::size_t j = 1; j < n; ++j)
-      keyframes_[window_->keyframes[j]].refined.pose = anchor * r.poses[j];
-    window_->quadrics[0] = r.quadrics;
-  } else {
-    last.used_front_end = true;
-  }
-  last.refine_ms += ms_since(t0);
-  // Every keyframe but the last is final now; the last one starts the next window.
-  while (window_->frames.size() > 1) {
-    emit_curvature(0, window_->quadrics[0]);
-    window_->pop_front();
-  }
-}
-
-void KeyframePipeline::finish() {
-  if (window_refiner_ && window_->frames.size() >= 2) refine_window();
-  // What remains has no refined quadrics as a reference frame: Quad IT gives its curvature.
-  while (!window_->frames.empty()) {
-    emit_curvature(0, window_->quadrics[0]);
-    window_->pop_front();
-  }
-}
-
-void KeyframePipeline::emit_curvature(std::size_t slot, const QuadricMap& quadrics) {
-  if (!sink_) return;
-  const Frame& frame = window_->frames[slot];
-  if (quadrics.width() > 0) {
-    sink_(window_->keyframes[slot], frame, quadrics);
-    return;
-  }
-  const QuadricFit fit(params_.joint.quadric);
-  sink_(window_->keyframes[slot], frame,
-        fit.estimate(compute_vertex_map(frame.depth, frame.camera)));
-}
-
-Trajectory KeyframePipeline::trajectory() const {
-  Trajectory out;
-  for (const PipelineFrame& f : frames_) {
-    const PipelineKeyframe& k = keyframes_[f.keyframe];
-    // Re-anchoring: the frame keeps its front-end offset from its keyframe.
-    StampedPose p = f.front_end;
-    p.pose = k.refined.pose * (k.front_end.pose.inverse() * f.front_end.pose);
-    out.push_back(p);
-  }
-  return out;
-}
-
-Trajectory KeyframePipeline::front_end_trajectory() const {
-  Trajectory out;
-  for (const PipelineFrame& f : frames_)
-    out.push_back(f.front_end);
-  return out;
+const PipelineFrame& KeyframePipeline::add(const Frame& frame) {
+  bool keyframe = false;
+  const PipelineFrame f = front_end_.track(frame, &keyframe);
+  return PipelineBackEnd::add(f, keyframe ? &frame : nullptr);
 }
 
 }  // namespace jpcr

@@ -15,6 +15,7 @@ struct DdsQos {
   bool reliable = true;          // RELIABLE (ROS default) or BEST_EFFORT (ROS sensor data)
   bool transient_local = false;  // TRANSIENT_LOCAL: late joiners get the last `depth` samples
   int depth = 10;                // samples, KEEP_LAST history
+  bool keep_all = false;         // KEEP_ALL history instead (depth unused): nothing is overwritten
 };
 
 struct DdsConfig {

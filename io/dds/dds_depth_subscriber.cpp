@@ -1,8 +1,10 @@
 #include "jpcr/io/dds/dds_depth_subscriber.hpp"
 
 #include <algorithm>
+#include <condition_variable>
 #include <deque>
 #include <iostream>
+#include <mutex>
 
 #include "jpcr/io/dds/ros_messages.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -11,27 +13,102 @@ namespace jpcr {
 
 namespace {
 
-// A depth image received before any camera_info, kept (copied) until one arrives.
-struct PendingImage {
+// A depth image as taken from Cyclone: a checked copy, or the problem that rejects it.
+struct ReceivedImage {
   RosImageBuffer image;
   RosStamp stamp;
+  std::string problem;
+};
+
+// A camera_info as taken from Cyclone, or the problem that rejects it.
+struct ReceivedCamera {
+  std::optional<CameraIntrinsics> camera;
+  std::string problem;
+};
+
+// Owns a listener object; the reader copies it at creation.
+struct Listener {
+  Listener(void* arg, dds_on_data_available_fn on_data) : handle(dds_create_listener(arg)) {
+    dds_lset_data_available(handle, on_data);
+  }
+  ~Listener() { dds_delete_listener(handle); }
+  dds_listener_t* handle;
 };
 
 }  // namespace
 
 struct DdsDepthSubscriber::State {
   State(const DdsParticipant& p, const DdsConfig& c)
-      : depth(p, c.depth_topic, c.depth_qos()),
-        camera_info(p, c.camera_info_topic, c.camera_info_qos()) {
-    limits.max_bytes = c.max_image_bytes();
-    limits.max_side = static_cast<std::uint32_t>(c.max_image_side);
+      : queue_depth(static_cast<std::size_t>(c.image_history_depth)),
+        limits(limits_of(c)),
+        camera_listener(this, on_camera_info),
+        depth_listener(this, on_depth),
+        camera_info(p, c.camera_info_topic, c.camera_info_qos(), camera_listener.handle),
+        depth(p, c.depth_topic, c.depth_qos(), depth_listener.handle) {}
+
+  static RosImageLimits limits_of(const DdsConfig& c) {
+    RosImageLimits l;
+    l.max_bytes = c.max_image_bytes();
+    l.max_side = static_cast<std::uint32_t>(c.max_image_side);
+    return l;
   }
-  DdsReader<RosImage> depth;
-  DdsReader<RosCameraInfoMsg> camera_info;
-  RosImageLimits limits;
+
+  // Cyclone's receive thread: take at once, so that the reader's history never overflows.
+  static void on_depth(dds_entity_t reader, void* arg) {
+    State& s = *static_cast<State*>(arg);
+    take_samples<RosImage>(reader, [&](const RosImage& m) {
+      ReceivedImage r;
+      const RosImageView view = image_view_of(m);
+      r.stamp = stamp_of(m.header);
+      try {
+        check_image_layout(view, {{"16UC1", 2}, {"32FC1", 4}}, s.limits);
+        r.image.height = view.height;
+        r.image.width = view.width;
+        r.image.encoding = std::string(view.encoding);
+        r.image.step = view.step;
+        r.image.data.assign(view.data, view.data + view.size);
+      } catch (const InputError& e) {
+        r.problem = e.what();
+      }
+      const std::lock_guard<std::mutex> lock(s.mutex);
+      s.images.push_back(std::move(r));
+      if (s.images.size() > s.queue_depth) {  // KEEP_LAST: the oldest goes, counted
+        s.images.pop_front();
+        ++s.dropped;
+      }
+      s.arrived.notify_all();
+    });
+  }
+
+  static void on_camera_info(dds_entity_t reader, void* arg) {
+    State& s = *static_cast<State*>(arg);
+    take_samples<RosCameraInfoMsg>(reader, [&](const RosCameraInfoMsg& m) {
+      ReceivedCamera r;
+      try {
+        r.camera = decode_camera_info(camera_info_of(m), s.limits);
+      } catch (const InputError& e) {
+        r.problem = e.what();
+      }
+      const std::lock_guard<std::mutex> lock(s.mutex);
+      s.cameras.push_back(std::move(r));
+      s.arrived.notify_all();
+    });
+  }
+
+  const std::size_t queue_depth;
+  const RosImageLimits limits;
+  std::mutex mutex;  // guards images, cameras, dropped
+  std::condition_variable arrived;
+  std::deque<ReceivedImage> images;
+  std::deque<ReceivedCamera> cameras;
+  std::size_t dropped = 0;
+  // The caller's thread only.
   std::optional<CameraIntrinsics> camera;
-  std::deque<PendingImage> pending;
   std::deque<Frame> frames;
+  // Declared last, deleted first: no callback runs once the members above go.
+  Listener camera_listener, depth_listener;
+  DdsReader<RosCameraInfoMsg> camera_info;
+  DdsReader<RosImage> depth;
 };
 
 DdsDepthSubscriber::DdsDepthSubscriber(const DdsParticipant& participant, const DdsConfig& config,
@@ -46,77 +123,100 @@ int DdsDepthSubscriber::matched() const {
   return state_->depth.matched();
 }
 
+std::size_t DdsDepthSubscriber::frames_dropped() const {
+  const std::lock_guard<std::mutex> lock(state_->mutex);
+  return state_->dropped + lost_;
+}
+
 void DdsDepthSubscriber::reject(const std::string& topic, const std::string& problem) {
   ++rejected_;
   *log_ << "jpcr dds: " << topic << ": rejected sample: " << problem << std::endl;
 }
 
-void DdsDepthSubscriber::poll() {
+// Decodes what the listeners queued (camera_info first, as a camera driver publishes it first),
+// outside the lock so that Cyclone's receive thread never waits for a decode.
+void DdsDepthSubscriber::process() {
   State& s = *state_;
-  s.camera_info.take([&](const RosCameraInfoMsg& m) {
-    try {
-      s.camera = decode_camera_info(camera_info_of(m), s.limits);
-    } catch (const InputError& e) {
-      reject(config_.camera_info_topic, e.what());
+  std::deque<ReceivedCamera> cameras;
+  {
+    const std::lock_guard<std::mutex> lock(s.mutex);
+    cameras.swap(s.cameras);
+  }
+  for (const ReceivedCamera& c : cameras) {
+    if (c.camera) {
+      s.camera = c.camera;
+    } else {
+      reject(config_.camera_info_topic, c.problem);
     }
-  });
-  auto decode = [&](const RosImageView& view, const RosStamp& stamp) {
+  }
+  std::deque<ReceivedImage> images;
+  std::size_t dropped = 0;
+  {
+    const std::lock_guard<std::mutex> lock(s.mutex);
+    if (s.camera) {
+      images.swap(s.images);
+    } else {  // good images wait in the queue for a camera_info; bad ones go now
+      for (auto it = s.images.begin(); it != s.images.end();) {
+        if (it->problem.empty()) {
+          ++it;
+          continue;
+        }
+        images.push_back(std::move(*it));
+        it = s.images.erase(it);
+      }
+    }
+    dropped = s.dropped;
+  }
+  for (const ReceivedImage& r : images) {
+    if (!r.problem.empty()) {
+      reject(config_.depth_topic, r.problem);
+      continue;
+    }
     try {
-      s.frames.push_back(decode_depth_frame(view, stamp, *s.camera, s.limits));
+      s.frames.push_back(decode_depth_frame(r.image.view(), r.stamp, *s.camera, s.limits));
       ++frames_;
     } catch (const InputError& e) {
       reject(config_.depth_topic, e.what());
     }
-  };
-  if (s.camera) {
-    for (const PendingImage& p : s.pending)
-      decode(p.image.view(), p.stamp);
-    s.pending.clear();
   }
-  s.depth.take([&](const RosImage& m) {
-    const RosImageView view = image_view_of(m);
-    const RosStamp stamp = stamp_of(m.header);
-    if (s.camera) return decode(view, stamp);
-    try {  // keep a checked copy until a camera_info arrives
-      check_image_layout(view, {{"16UC1", 2}, {"32FC1", 4}}, s.limits);
-    } catch (const InputError& e) {
-      return reject(config_.depth_topic, e.what());
-    }
-    if (s.pending.size() >= static_cast<std::size_t>(config_.image_history_depth)) {
-      s.pending.pop_front();
-      reject(config_.depth_topic, "no camera_info received yet on " + config_.camera_info_topic);
-    }
-    PendingImage p;
-    p.image.height = view.height;
-    p.image.width = view.width;
-    p.image.encoding = std::string(view.encoding);
-    p.image.step = view.step;
-    p.image.data.assign(view.data, view.data + view.size);
-    p.stamp = stamp;
-    s.pending.push_back(std::move(p));
-  });
+  // Samples Cyclone itself knows it lost on the way (e.g. gone from the writer's history before
+  // a retransmission): counted as dropped too.
+  dds_sample_lost_status_t lost{};
+  if (dds_get_sample_lost_status(s.depth.handle(), &lost) == DDS_RETCODE_OK &&
+      lost.total_count > lost_) {
+    *log_ << "jpcr dds: " << config_.depth_topic << ": " << lost.total_count - lost_
+          << " frame(s) lost in transport, " << lost.total_count << " in all" << std::endl;
+    lost_ = lost.total_count;
+  }
+  if (dropped > dropped_logged_) {
+    *log_ << "jpcr dds: " << config_.depth_topic << ": dropped " << dropped - dropped_logged_
+          << " frame(s), " << dropped << " in all: frames arrive faster than they are processed"
+          << (s.camera ? "" : " or no camera_info received yet on " + config_.camera_info_topic)
+          << " (keep last " << s.queue_depth << ")" << std::endl;
+    dropped_logged_ = dropped;
+  }
 }
 
 std::optional<Frame> DdsDepthSubscriber::wait_frame(std::chrono::milliseconds timeout) {
-  using Clock = std::chrono::steady_clock;
-  const Clock::time_point deadline = Clock::now() + timeout;
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
   State& s = *state_;
+  // What process() would act on: a camera_info, a new drop, a bad image, or a good one that has
+  // its camera.
+  auto work = [&] {
+    if (!s.cameras.empty() || s.dropped != dropped_logged_) return true;
+    if (s.camera) return !s.images.empty();
+    return std::any_of(s.images.begin(), s.images.end(),
+                       [](const ReceivedImage& r) { return !r.problem.empty(); });
+  };
   for (;;) {
-    poll();
+    process();
     if (!s.frames.empty()) {
       Frame f = std::move(s.frames.front());
       s.frames.pop_front();
       return f;
     }
-    const Clock::time_point now = Clock::now();
-    if (now >= deadline) return std::nullopt;
-    const auto left = std::chrono::duration_cast<std::chrono::nanoseconds>(deadline - now);
-    // Without a camera, a pending image waits for camera_info; otherwise depth is what we need.
-    if (s.pending.empty()) {
-      s.depth.wait(left);
-    } else {
-      s.camera_info.wait(left);
-    }
+    std::unique_lock<std::mutex> lock(s.mutex);
+    if (!s.arrived.wait_until(lock, deadline, work)) return std::nullopt;
   }
 }
 

@@ -2,13 +2,20 @@
 // on DdsConfig::depth_topic with the latest sensor_msgs/CameraInfo of camera_info_topic. Every
 // sample is checked (io/dds/ros_image.hpp); a bad one is dropped with one line on the log naming
 // the topic and the problem, and reception goes on.
+//
+// Samples are taken from Cyclone as they arrive (a listener on Cyclone's receive thread) into a
+// queue of at most image_history_depth images, the KEEP_LAST depth of the input QoS: when the
+// caller is slower than the camera, the oldest waiting image is dropped, counted
+// (frames_dropped()) and logged, never lost silently in the reader's history.
 #pragma once
 
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <iosfwd>
 #include <memory>
 #include <optional>
+#include <string>
 
 #include "jpcr/io/dds/dds_config.hpp"
 #include "jpcr/io/dds/dds_participant.hpp"
@@ -18,7 +25,8 @@ namespace jpcr {
 
 class DdsDepthSubscriber {
  public:
-  /// `log` receives one line per rejected sample (default std::cerr).
+  /// `log` receives one line per rejected sample and per burst of dropped frames (default
+  /// std::cerr); it is written from the caller's thread only.
   DdsDepthSubscriber(const DdsParticipant& participant, const DdsConfig& config,
                      std::ostream* log = nullptr);
   ~DdsDepthSubscriber();
@@ -26,17 +34,20 @@ class DdsDepthSubscriber {
   DdsDepthSubscriber& operator=(const DdsDepthSubscriber&) = delete;
 
   /// The next valid depth frame, waiting up to `timeout`; nullopt on timeout. A depth image that
-  /// arrives before any camera_info waits (up to image_history_depth of them) for one.
+  /// arrives before any camera_info waits (in the queue) for one.
   std::optional<Frame> wait_frame(std::chrono::milliseconds timeout);
 
   std::size_t frames_received() const { return frames_; }
   std::size_t samples_rejected() const { return rejected_; }
+  /// Depth images dropped from the full queue before the caller asked for them, plus those
+  /// Cyclone reports lost in transport (sample lost status).
+  std::size_t frames_dropped() const;
   /// Publishers matched on the depth topic.
   int matched() const;
 
  private:
   struct State;
-  void poll();
+  void process();
   void reject(const std::string& topic, const std::string& problem);
 
   DdsConfig config_;
@@ -44,6 +55,8 @@ class DdsDepthSubscriber {
   std::unique_ptr<State> state_;
   std::size_t frames_ = 0;
   std::size_t rejected_ = 0;
+  std::size_t dropped_logged_ = 0;
+  std::uint32_t lost_ = 0;
 };
 
 }  // namespace jpcr

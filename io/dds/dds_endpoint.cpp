@@ -14,7 +14,11 @@ class Qos {
                          DDS_SECS(1));
     dds_qset_durability(
         qos_, q.transient_local ? DDS_DURABILITY_TRANSIENT_LOCAL : DDS_DURABILITY_VOLATILE);
-    dds_qset_history(qos_, DDS_HISTORY_KEEP_LAST, q.depth);
+    if (q.keep_all) {
+      dds_qset_history(qos_, DDS_HISTORY_KEEP_ALL, 0);
+    } else {
+      dds_qset_history(qos_, DDS_HISTORY_KEEP_LAST, q.depth);
+    }
     const dds_data_representation_id_t xcdr1[] = {DDS_DATA_REPRESENTATION_XCDR1};
     dds_qset_data_representation(qos_, 1, xcdr1);
   }
@@ -46,9 +50,11 @@ void DdsEntity::reset() {
 }
 
 DdsEndpoint::DdsEndpoint(const DdsParticipant& participant, const std::string& topic,
-                         const dds_topic_descriptor_t& type, const DdsQos& qos, Kind kind)
+                         const dds_topic_descriptor_t& type, const DdsQos& qos, Kind kind,
+                         const dds_listener_t* listener)
     : name_(topic), kind_(kind) {
-  if (qos.depth < 1) throw DdsError("topic " + topic + ": history depth must be at least 1");
+  if (!qos.keep_all && qos.depth < 1)
+    throw DdsError("topic " + topic + ": history depth must be at least 1");
   const Qos q(qos);
   topic_ = DdsEntity(
       check_dds(dds_create_topic(participant.handle(), &type, topic.c_str(), nullptr, nullptr),
@@ -60,7 +66,7 @@ DdsEndpoint::DdsEndpoint(const DdsParticipant& participant, const std::string& t
     return;
   }
   endpoint_ =
-      DdsEntity(check_dds(dds_create_reader(participant.handle(), topic_.get(), q.get(), nullptr),
+      DdsEntity(check_dds(dds_create_reader(participant.handle(), topic_.get(), q.get(), listener),
                           "dds_create_reader(" + topic + ")"));
   condition_ = DdsEntity(check_dds(dds_create_readcondition(endpoint_.get(), DDS_ANY_STATE),
                                    "dds_create_readcondition(" + topic + ")"));

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstddef>
 #include <string>
+#include <utility>
 
 #include <dds/dds.h>
 
@@ -41,8 +42,10 @@ class DdsEntity {
 class DdsEndpoint {
  public:
   enum class Kind { kWriter, kReader };
+  /// `listener` (a reader's, may be null) is copied; its callbacks run on Cyclone's threads.
   DdsEndpoint(const DdsParticipant& participant, const std::string& topic,
-              const dds_topic_descriptor_t& type, const DdsQos& qos, Kind kind);
+              const dds_topic_descriptor_t& type, const DdsQos& qos, Kind kind,
+              const dds_listener_t* listener = nullptr);
 
   const std::string& topic() const { return name_; }
   dds_entity_t handle() const { return endpoint_.get(); }
@@ -72,39 +75,47 @@ class DdsWriter : public DdsEndpoint {
   void write(const Msg& sample) const { write_sample(&sample); }
 };
 
+/// Takes every available sample of `reader` and calls on_sample(const Msg&) on each valid one;
+/// the sample is a loan valid only during the call. Returns the number of valid samples. For
+/// DdsReader::take and for listener callbacks, which get the reader's handle.
+template <typename Msg, typename OnSample>
+std::size_t take_samples(dds_entity_t reader, OnSample&& on_sample) {
+  constexpr std::size_t kBatch = 8;  // samples per loan
+  std::size_t valid = 0;
+  for (;;) {
+    void* samples[kBatch] = {};
+    dds_sample_info_t infos[kBatch];
+    const dds_return_t n = dds_take(reader, samples, infos, kBatch, kBatch);
+    if (n <= 0) return valid;
+    struct Loan {
+      dds_entity_t reader;
+      void** samples;
+      dds_return_t n;
+      ~Loan() { dds_return_loan(reader, samples, n); }
+    } loan{reader, samples, n};
+    for (dds_return_t i = 0; i < n; ++i) {
+      if (!infos[i].valid_data) continue;
+      ++valid;
+      on_sample(*static_cast<const Msg*>(samples[i]));
+    }
+    if (static_cast<std::size_t>(n) < kBatch) return valid;
+  }
+}
+
 template <typename Msg>
 class DdsReader : public DdsEndpoint {
  public:
-  DdsReader(const DdsParticipant& participant, const std::string& topic, const DdsQos& qos)
-      : DdsEndpoint(participant, topic, DdsType<Msg>::descriptor(), qos, Kind::kReader) {}
+  DdsReader(const DdsParticipant& participant, const std::string& topic, const DdsQos& qos,
+            const dds_listener_t* listener = nullptr)
+      : DdsEndpoint(participant, topic, DdsType<Msg>::descriptor(), qos, Kind::kReader, listener) {}
 
   /// Waits up to `timeout` for samples.
   bool wait(std::chrono::nanoseconds timeout) const { return wait_data(timeout); }
 
-  /// Takes every available sample and calls on_sample(const Msg&) on each valid one; the sample
-  /// is a loan valid only during the call. Returns the number of valid samples.
+  /// take_samples on this reader.
   template <typename OnSample>
   std::size_t take(OnSample&& on_sample) const {
-    constexpr std::size_t kBatch = 8;  // samples per loan
-    std::size_t valid = 0;
-    for (;;) {
-      void* samples[kBatch] = {};
-      dds_sample_info_t infos[kBatch];
-      const dds_return_t n = dds_take(handle(), samples, infos, kBatch, kBatch);
-      if (n <= 0) return valid;
-      struct Loan {
-        dds_entity_t reader;
-        void** samples;
-        dds_return_t n;
-        ~Loan() { dds_return_loan(reader, samples, n); }
-      } loan{handle(), samples, n};
-      for (dds_return_t i = 0; i < n; ++i) {
-        if (!infos[i].valid_data) continue;
-        ++valid;
-        on_sample(*static_cast<const Msg*>(samples[i]));
-      }
-      if (static_cast<std::size_t>(n) < kBatch) return valid;
-    }
+    return take_samples<Msg>(handle(), std::forward<OnSample>(on_sample));
   }
 };
 

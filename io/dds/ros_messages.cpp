@@ -1,6 +1,7 @@
 #include "jpcr/io/dds/ros_messages.hpp"
 
 #include <cmath>
+#include <stdexcept>
 
 #include "jpcr/quadric/error.hpp"
 
@@ -110,7 +111,8 @@ PathMessage::PathMessage(const Trajectory& trajectory, const std::string& frame_
 KeyframeMessage::KeyframeMessage(const Frame& frame, const StampedPose& pose,
                                  const Matrix6d& covariance, DepthEncoding encoding,
                                  const std::string& world_frame_id,
-                                 const std::string& camera_frame_id)
+                                 const std::string& camera_frame_id, int frame_index,
+                                 const Trajectory& tracked)
     : world_frame_id_(world_frame_id),
       camera_frame_id_(camera_frame_id),
       depth_(encode_depth_image(frame.depth, encoding)),
@@ -120,6 +122,32 @@ KeyframeMessage::KeyframeMessage(const Frame& frame, const StampedPose& pose,
   message_.depth = image_message(depth_, frame.timestamp, camera_frame_id_);
   message_.pose.pose = pose_message(pose.pose);
   covariance_message(covariance, message_.pose.covariance);
+  set_tracked(frame_index, tracked);
+}
+
+KeyframeMessage::KeyframeMessage(int frames, const Trajectory& tracked,
+                                 const std::string& world_frame_id)
+    : world_frame_id_(world_frame_id) {
+  const double stamp = tracked.empty() ? 0.0 : tracked.back().timestamp;
+  message_.header = header_message(stamp, world_frame_id_);
+  // Empty, not null, strings: the serializer reads them.
+  message_.camera_info.header = header_message(stamp, camera_frame_id_);
+  message_.camera_info.distortion_model = borrow(camera_frame_id_);
+  message_.depth.header = header_message(stamp, camera_frame_id_);
+  message_.depth.encoding = borrow(camera_frame_id_);
+  message_.pose.pose = pose_message(Eigen::Isometry3d::Identity());
+  set_tracked(frames, tracked);
+  message_.end_of_stream = true;
+}
+
+void KeyframeMessage::set_tracked(int frame_index, const Trajectory& tracked) {
+  if (frame_index < static_cast<int>(tracked.size()))
+    throw std::invalid_argument("KeyframeMessage: more tracked frames than frame_index");
+  message_.frame_index = static_cast<std::uint32_t>(frame_index);
+  tracked_.reserve(tracked.size());
+  for (const StampedPose& p : tracked)
+    tracked_.push_back(pose_stamped_message(p, world_frame_id_));
+  message_.tracked = borrow_sequence<dds_sequence_geometry_msgs_msg_dds__PoseStamped_>(tracked_);
 }
 
 RosStamp stamp_of(const std_msgs_msg_dds__Header_& header) {
@@ -183,6 +211,14 @@ RosCameraInfo camera_info_of(const RosCameraInfoMsg& message) {
 
 DecodedKeyframe decode_keyframe(const RosKeyframe& message, const RosImageLimits& limits) {
   DecodedKeyframe k;
+  k.frame_index = static_cast<int>(message.frame_index);
+  if (message.tracked._length > message.frame_index)
+    throw InputError("keyframe " + std::to_string(message.frame_index) + " carries " +
+                     std::to_string(message.tracked._length) + " tracked frames before it");
+  for (std::uint32_t i = 0; i < message.tracked._length; ++i)
+    k.tracked.push_back(stamped_pose_of(message.tracked._buffer[i]));
+  k.end_of_stream = message.end_of_stream;
+  if (k.end_of_stream) return k;
   const CameraIntrinsics camera = decode_camera_info(camera_info_of(message.camera_info), limits);
   k.frame = decode_depth_frame(image_view_of(message.depth), stamp_of(message.depth.header), camera,
                                limits);

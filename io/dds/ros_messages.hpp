@@ -70,20 +70,28 @@ class PathMessage {
   RosPath message_{};
 };
 
-/// A Keyframe with its own storage (depth in `encoding`, camera info, pose and covariance).
+/// A Keyframe with its own storage (depth in `encoding`, camera info, pose and covariance), its
+/// frame index and the front end's poses of the frames tracked since the previous keyframe.
 class KeyframeMessage {
  public:
   KeyframeMessage(const Frame& frame, const StampedPose& pose, const Matrix6d& covariance,
                   DepthEncoding encoding, const std::string& world_frame_id,
-                  const std::string& camera_frame_id);
+                  const std::string& camera_frame_id, int frame_index = 0,
+                  const Trajectory& tracked = {});
+  /// The end-of-stream marker: no keyframe; `tracked` are the frames after the last keyframe and
+  /// `frames` the number of frames tracked in all.
+  KeyframeMessage(int frames, const Trajectory& tracked, const std::string& world_frame_id);
   KeyframeMessage(const KeyframeMessage&) = delete;
   KeyframeMessage& operator=(const KeyframeMessage&) = delete;
   const RosKeyframe& message() const { return message_; }
 
  private:
+  void set_tracked(int frame_index, const Trajectory& tracked);
+
   std::string world_frame_id_, camera_frame_id_;
   RosImageBuffer depth_;
   RosCameraInfo camera_;
+  std::vector<RosPoseStamped> tracked_;
   RosKeyframe message_{};
 };
 
@@ -99,11 +107,15 @@ Trajectory trajectory_of(const RosPath& message);
 RosImageView image_view_of(const RosImage& message);
 RosCameraInfo camera_info_of(const RosCameraInfoMsg& message);
 
-/// A received keyframe, decoded and checked like a depth frame.
+/// A received keyframe, decoded and checked like a depth frame (frame, pose and covariance are
+/// empty in the end-of-stream marker).
 struct DecodedKeyframe {
   Frame frame;
   StampedPose pose;
   Matrix6d covariance = Matrix6d::Zero();
+  int frame_index = 0;
+  Trajectory tracked;  // the frames frame_index - tracked.size() ... frame_index - 1
+  bool end_of_stream = false;
 };
 DecodedKeyframe decode_keyframe(const RosKeyframe& message, const RosImageLimits& limits);
 

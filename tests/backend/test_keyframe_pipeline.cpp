@@ -136,5 +136,26 @@ TEST(KeyframePipeline, RefusesBadInput) {
   EXPECT_THROW(pipeline.add(small), InputError);
 }
 
+// The split deployment's back end gets the frames from another process: a lost or reordered one,
+// or a first frame that is not a keyframe, is refused rather than hung on the wrong keyframe.
+TEST(PipelineBackEnd, RefusesFramesOutOfOrder) {
+  PipelineParams p;
+  p.method = PipelineMethod::kIcpFtf;
+  PipelineBackEnd back_end(p);
+  const SyntheticSequence seq = walk(1);
+  const Frame frame = seq.load(0);
+  PipelineFrame f;
+  EXPECT_THROW(back_end.add(f, nullptr), InputError);  // frame 0 must be a keyframe
+  f.index = 1;
+  EXPECT_THROW(back_end.add(f, &frame), InputError);  // frame 0 is missing
+  f.index = 0;
+  EXPECT_EQ(back_end.add(f, &frame).keyframe, 0);
+  f.index = 1;
+  EXPECT_EQ(back_end.add(f, nullptr).keyframe, 0);     // hangs on keyframe 0
+  EXPECT_THROW(back_end.add(f, nullptr), InputError);  // frame 1 again
+  EXPECT_EQ(back_end.frames().size(), 2u);
+  EXPECT_EQ(back_end.keyframes().size(), 1u);
+}
+
 }  // namespace
 }  // namespace jpcr

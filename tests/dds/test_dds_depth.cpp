@@ -1,9 +1,12 @@
 // Depth input over real Cyclone DDS on loopback: a frame published as 16UC1 or 32FC1 with its
 // camera_info arrives as the identical jpcr::Frame; malformed samples are rejected with one log
-// line each while the subscriber keeps receiving.
+// line each while the subscriber keeps receiving; frames the caller is too slow for are dropped,
+// counted and logged.
 #include <gtest/gtest.h>
 
 #include <sstream>
+#include <thread>
+#include <vector>
 
 #include "dds_test_config.hpp"
 #include "jpcr/io/dds/dds_depth_publisher.hpp"
@@ -160,6 +163,30 @@ TEST_F(DdsDepth, DepthBeforeCameraInfoWaitsForIt) {
   const std::optional<Frame> got = subscriber.wait_frame(kTimeout);
   ASSERT_TRUE(got);
   expect_same_frame(*got, sent, 1.0);
+}
+
+// A caller slower than the camera: of 7 frames sent before it asks, the queue (keep last 2)
+// keeps the newest 2; the other 5 are counted and logged, not lost silently in Cyclone.
+TEST_F(DdsDepth, FramesTheCallerIsTooSlowForAreDroppedCountedAndLogged) {
+  ASSERT_EQ(config_.image_history_depth, 2);
+  std::ostringstream log;
+  DdsDepthSubscriber subscriber(node_side_, config_, &log);
+  DdsDepthPublisher publisher(camera_side_, config_, DepthEncoding::kMetres32);
+  ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
+  constexpr int kSent = 7;
+  for (int i = 0; i < kSent; ++i) {
+    publisher.publish(test_frame(1.0 + i));
+    ASSERT_TRUE(publisher.flush(kTimeout));  // acknowledged: it reached the subscriber's process
+  }
+  std::this_thread::sleep_for(milliseconds(200));  // and its listener
+  std::vector<double> stamps;
+  while (const std::optional<Frame> f = subscriber.wait_frame(milliseconds(300)))
+    stamps.push_back(f->timestamp);
+  EXPECT_EQ(stamps, (std::vector<double>{6.0, 7.0}));
+  EXPECT_EQ(subscriber.frames_dropped(), 5u);
+  EXPECT_EQ(subscriber.frames_received(), 2u);
+  EXPECT_NE(log.str().find("image_raw: dropped 5 frame(s), 5 in all"), std::string::npos)
+      << log.str();
 }
 
 }  // namespace

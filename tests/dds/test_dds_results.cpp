@@ -1,5 +1,6 @@
 // Real Cyclone DDS round trips on loopback for the published result topics: pose, odometry with
-// covariance, path to a late joiner, a 640x480 32FC2 curvature map bit-exact, its colour image.
+// covariance, path to a late joiner, a 640x480 32FC2 curvature map bit-exact, its colour image;
+// the split deployment's keyframe messages.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -7,8 +8,11 @@
 #include <limits>
 #include <optional>
 #include <random>
+#include <sstream>
+#include <vector>
 
 #include "dds_test_config.hpp"
+#include "jpcr/io/dds/dds_keyframe_link.hpp"
 #include "jpcr/io/dds/dds_result_publisher.hpp"
 #include "jpcr/io/dds/ros_messages.hpp"
 #include "jpcr/quadric/se3.hpp"
@@ -176,10 +180,13 @@ TEST_F(DdsResults, KeyframeMessageRoundTrips) {
   frame.depth(3, 4) = 0.0f;
   Matrix6d cov = Matrix6d::Identity() * 1e-3;
   cov(0, 5) = 2e-5;
-  const KeyframeMessage message(frame, some_pose(7.5), cov, DepthEncoding::kMetres32, "map", "cam");
+  const Trajectory tracked = {some_pose(6.5), some_pose(7.0)};
+  const KeyframeMessage message(frame, some_pose(7.5), cov, DepthEncoding::kMetres32, "map", "cam",
+                                9, tracked);
   writer.write(message.message());
   const auto got = take_one(reader, [](const RosKeyframe& m) { return decode_keyframe(m, {}); });
   ASSERT_TRUE(got);
+  EXPECT_FALSE(got->end_of_stream);
   EXPECT_EQ(got->frame.timestamp, 7.5);
   EXPECT_EQ(got->frame.camera.fx, frame.camera.fx);
   EXPECT_EQ(got->frame.camera.width, 32);
@@ -187,6 +194,61 @@ TEST_F(DdsResults, KeyframeMessageRoundTrips) {
     ASSERT_EQ(got->frame.depth[i], frame.depth[i]);
   expect_same_pose(got->pose.pose, some_pose(7.5).pose);
   EXPECT_EQ(got->covariance, cov);
+  EXPECT_EQ(got->frame_index, 9);
+  ASSERT_EQ(got->tracked.size(), 2u);
+  EXPECT_EQ(got->tracked[1].timestamp, 7.0);
+  expect_same_pose(got->tracked[1].pose, tracked[1].pose);
+
+  // The end-of-stream marker: the frames after the last keyframe, no depth.
+  const KeyframeMessage end(12, {some_pose(8.0)}, "map");
+  writer.write(end.message());
+  const auto last = take_one(reader, [](const RosKeyframe& m) { return decode_keyframe(m, {}); });
+  ASSERT_TRUE(last);
+  EXPECT_TRUE(last->end_of_stream);
+  EXPECT_EQ(last->frame_index, 12);
+  ASSERT_EQ(last->tracked.size(), 1u);
+  EXPECT_EQ(last->tracked[0].timestamp, 8.0);
+}
+
+// The split deployment's link: keyframes arrive in order over the keep-all topic, a malformed
+// one is rejected with one log line and reception goes on.
+TEST_F(DdsResults, KeyframeLinkDeliversInOrderAndRejectsMalformedKeyframes) {
+  std::ostringstream log;
+  DdsKeyframeReader reader(subscriber_side_, config_, &log);
+  const DdsKeyframeWriter writer(publisher_side_, config_);
+  ASSERT_TRUE(writer.wait_matched(kTimeout));
+  Frame frame;
+  frame.camera.width = 16;
+  frame.camera.height = 12;
+  frame.depth = DepthImage(16, 12, 2.0f);
+  for (int i = 0; i < 3; ++i) {
+    frame.timestamp = 1.0 + i;
+    writer.publish(frame, some_pose(frame.timestamp), Matrix6d::Identity(), 2 * i,
+                   i == 0 ? Trajectory{} : Trajectory{some_pose(0.5 + i)});
+  }
+  // Data length != step x height.
+  KeyframeMessage bad(frame, some_pose(4.0), Matrix6d::Identity(), DepthEncoding::kMetres32, "map",
+                      "cam", 6);
+  RosKeyframe shortened = bad.message();
+  shortened.depth.data._length -= 4;
+  const DdsWriter<RosKeyframe> raw(publisher_side_, keyframe_topic_name(config_),
+                                   keyframe_topic_qos());
+  ASSERT_TRUE(raw.wait_matched(1, kTimeout));
+  raw.write(shortened);
+  ASSERT_TRUE(raw.wait_for_acks(kTimeout));  // received before the end of stream is sent
+  writer.publish_end(7, {some_pose(5.0)});
+  std::vector<int> indices;
+  bool end = false;
+  while (!end) {
+    const std::optional<DecodedKeyframe> k = reader.wait(kTimeout);
+    ASSERT_TRUE(k) << "after " << indices.size() << " keyframes";
+    end = k->end_of_stream;
+    indices.push_back(k->frame_index);
+  }
+  EXPECT_EQ(indices, (std::vector<int>{0, 2, 4, 7}));
+  EXPECT_EQ(reader.samples_rejected(), 1u);
+  EXPECT_NE(log.str().find("keyframe: rejected sample: data is 764 bytes"), std::string::npos)
+      << log.str();
 }
 
 TEST(DdsParticipant, BadDomainIdIsAnError) {

@@ -34,7 +34,10 @@ echo "ok: 5 depth images and 5 camera_infos received from jpcr_dds_play"
 "$play" --dataset "$tum" --config "$cam" --rate 0.05 --domain $domain --wait-subscribers 0 \
   > "$tmp/slow.txt" 2>&1 &
 slow=$!
-sleep 1.5; kill -INT $slow; wait $slow; rc=$?
+# Its first line comes after the handler is installed (before it, a background job ignores
+# SIGINT); wait for it, bounded, on a busy machine.
+for ((i = 0; i < 300; ++i)); do grep -q "^jpcr_dds_play: " "$tmp/slow.txt" && break; sleep 0.1; done
+sleep 0.5; kill -INT $slow; wait $slow; rc=$?
 if [ "$rc" != 0 ] || ! grep -q "stopped by signal" "$tmp/slow.txt"; then
   echo "FAIL: SIGINT: exit $rc"; cat "$tmp/slow.txt"; fail=1
 else

@@ -4,23 +4,25 @@
 
 namespace jpcr::cli {
 
-void PipelinePublisher::keyframe_final(const KeyframePipeline& pipeline, int keyframe,
+void PipelinePublisher::keyframe_final(const PipelineBackEnd& pipeline, int keyframe,
                                        const QuadricMap& quadrics) {
   const StampedPose& pose = pipeline.keyframes().at(static_cast<std::size_t>(keyframe)).refined;
   publisher_.publish_keyframe(pose, quadrics.curvature, render_curvature(quadrics.curvature));
   ++keyframes_published_;
 }
 
-void PipelinePublisher::frame_added(const KeyframePipeline& pipeline, const PipelineFrame& frame) {
-  const Trajectory trajectory = pipeline.trajectory();
-  publisher_.publish_odometry(trajectory.back(), frame.icp_covariance);
-  if (pipeline.keyframes().size() != keyframes_seen_) {
-    keyframes_seen_ = pipeline.keyframes().size();
-    publisher_.publish_path(trajectory);
-  }
+void PipelinePublisher::frame_added(const PipelineBackEnd& pipeline, const PipelineFrame& frame) {
+  publisher_.publish_odometry(pipeline.trajectory().back(), frame.icp_covariance);
+  path_if_refined(pipeline);
 }
 
-void PipelinePublisher::finished(const KeyframePipeline& pipeline) {
+void PipelinePublisher::path_if_refined(const PipelineBackEnd& pipeline) {
+  if (pipeline.keyframes().size() == keyframes_seen_) return;
+  keyframes_seen_ = pipeline.keyframes().size();
+  publisher_.publish_path(pipeline.trajectory());
+}
+
+void PipelinePublisher::finished(const PipelineBackEnd& pipeline) {
   publisher_.publish_path(pipeline.trajectory());
 }
 

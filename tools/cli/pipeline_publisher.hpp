@@ -1,8 +1,10 @@
-// Publishes what a KeyframePipeline produces on the jpcr result topics (DdsResultPublisher), for
-// jpcr_node and jpcr_run --dds:
+// Publishes what a PipelineBackEnd (a KeyframePipeline, or the back-end process of the split
+// deployment) produces on the jpcr result topics (DdsResultPublisher), for jpcr_node and
+// jpcr_run --dds:
 //   odom             after every frame: the frame's current refined pose (trajectory().back())
 //                    with the front end's ICP covariance (PipelineFrame::icp_covariance; zero
-//                    for the first frame, the gauge)
+//                    for the first frame, the gauge); not in the split deployment, where the
+//                    front-end process publishes its own poses
 //   keyframe_pose,   when a keyframe's curvature map is final (the pipeline's CurvatureSink):
 //   curvature,       its refined pose, κ1/κ2 map (32FC2) and render_curvature (rgb8)
 //   curvature_color
@@ -13,7 +15,7 @@
 #include <chrono>
 #include <cstddef>
 
-#include "jpcr/backend/keyframe_pipeline.hpp"
+#include "jpcr/backend/pipeline_back_end.hpp"
 #include "jpcr/io/dds/dds_result_publisher.hpp"
 
 namespace jpcr::cli {
@@ -24,11 +26,13 @@ class PipelinePublisher {
       : publisher_(participant, config) {}
 
   /// The CurvatureSink body; `pipeline` is the one calling it.
-  void keyframe_final(const KeyframePipeline& pipeline, int keyframe, const QuadricMap& quadrics);
-  /// After each KeyframePipeline::add().
-  void frame_added(const KeyframePipeline& pipeline, const PipelineFrame& frame);
-  /// After KeyframePipeline::finish(): the final path.
-  void finished(const KeyframePipeline& pipeline);
+  void keyframe_final(const PipelineBackEnd& pipeline, int keyframe, const QuadricMap& quadrics);
+  /// After each KeyframePipeline::add(): odom, and the path when the frame added a keyframe.
+  void frame_added(const PipelineBackEnd& pipeline, const PipelineFrame& frame);
+  /// The path, when keyframes were added since the last one published.
+  void path_if_refined(const PipelineBackEnd& pipeline);
+  /// After PipelineBackEnd::finish(): the final path.
+  void finished(const PipelineBackEnd& pipeline);
 
   bool flush(std::chrono::milliseconds timeout) const { return publisher_.flush(timeout); }
   std::size_t keyframes_published() const { return keyframes_published_; }

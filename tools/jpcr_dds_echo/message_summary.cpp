@@ -107,7 +107,10 @@ std::string summarize(const RosCameraInfoMsg& m) {
 }
 
 std::string summarize(const RosKeyframe& m) {
-  return header("keyframe", m.header) + " depth " + std::to_string(m.depth.width) + "x" +
+  const std::string frames = " frame_index=" + std::to_string(m.frame_index) +
+                             " tracked=" + std::to_string(m.tracked._length);
+  if (m.end_of_stream) return header("keyframe", m.header) + frames + " end_of_stream";
+  return header("keyframe", m.header) + frames + " depth " + std::to_string(m.depth.width) + "x" +
          std::to_string(m.depth.height) + " " + text(m.depth.encoding) + pose(m.pose.pose) +
          covariance_diagonal(m.pose.covariance);
 }

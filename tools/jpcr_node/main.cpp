@@ -1,11 +1,14 @@
 // jpcr_node: the live system over DDS. Subscribes a ROS 2 depth camera (sensor_msgs/Image 16UC1
 // or 32FC1 + sensor_msgs/CameraInfo, the dds: section's topics), runs every received frame
-// through the KeyframePipeline and publishes odom, keyframe_pose, curvature, curvature_color and
-// path (cli/pipeline_publisher.hpp). Stops cleanly on SIGINT/SIGTERM, after --max-frames frames,
-// or when no frame arrived for --idle-timeout seconds after the first: finishes the pipeline,
-// publishes the final path, waits for the readers' acknowledgements and exits 0.
-#include <unistd.h>
-
+// through the keyframe pipeline and publishes odom, keyframe_pose, curvature, curvature_color and
+// path (cli/pipeline_publisher.hpp). --role splits the pipeline over two processes joined by the
+// keyframe topic (io/dds/dds_keyframe_link.hpp):
+//   all       (default) front end and back end in this process (KeyframePipeline)
+//   frontend  PipelineFrontEnd: depth in, odom (front-end poses) and keyframes out
+//   backend   PipelineBackEnd: keyframes in, keyframe_pose, curvature, curvature_color, path out
+// Stops cleanly on SIGINT/SIGTERM, after --max-frames frames, when no input arrived for
+// --idle-timeout seconds after the first, or (back end) at the front end's end of stream:
+// finishes, publishes what is left, waits for the readers' acknowledgements and exits 0.
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -16,18 +19,148 @@
 #include "cli/pipeline_options.hpp"
 #include "cli/pipeline_publisher.hpp"
 #include "cli/stop_signal.hpp"
+#include "jpcr/backend/keyframe_pipeline.hpp"
 #include "jpcr/io/dds/dds_depth_subscriber.hpp"
+#include "jpcr/io/dds/dds_keyframe_link.hpp"
 #include "jpcr/io/params.hpp"
 #include "jpcr/quadric/error.hpp"
+#include "jpcr_node/node_loop.hpp"
 
 namespace jpcr {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
+struct NodeOptions {
+  PipelineParams pipeline;
+  DdsConfig dds;
+  node::StopRules stop;
+  std::chrono::milliseconds flush_timeout{5000};
+  std::chrono::milliseconds backend_wait{10000};
+};
 
-double seconds_since(Clock::time_point t) {
-  return std::chrono::duration<double>(Clock::now() - t).count();
+std::chrono::milliseconds milliseconds_of(double seconds) {
+  return std::chrono::milliseconds(static_cast<long long>(seconds * 1000.0));
+}
+
+// Front end and back end in one process.
+int run_all(const NodeOptions& o, const DdsParticipant& participant) {
+  DdsDepthSubscriber subscriber(participant, o.dds);
+  cli::PipelinePublisher publisher(participant, o.dds);
+  std::optional<KeyframePipeline> runner;
+  runner.emplace(o.pipeline, [&](int keyframe, const Frame&, const QuadricMap& quadrics) {
+    publisher.keyframe_final(*runner, keyframe, quadrics);
+  });
+  node::Progress progress;
+  const node::Outcome outcome = node::receive(
+      o.stop, [&](auto slice) { return subscriber.wait_frame(slice); },
+      [&](const Frame& frame) {
+        const PipelineFrame& f = runner->add(frame);
+        publisher.frame_added(*runner, f);
+        progress.frame(f, runner->keyframes().size(), subscriber);
+        return node::Step::kProcessed;
+      });
+  progress.done();
+  std::cerr << "jpcr_node: " << node::rate_summary(outcome, "frames") << '\n';
+  if (outcome.processed > 0) {
+    runner->finish();
+    publisher.finished(*runner);
+  }
+  if (!publisher.flush(o.flush_timeout))
+    std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
+  std::cout << "processed " << outcome.processed << " frames, " << runner->keyframes().size()
+            << " keyframes, " << publisher.keyframes_published() << " curvature maps; "
+            << node::input_summary(subscriber) << ", skipped " << outcome.skipped
+            << " frames; stopped by " << outcome.reason << '\n';
+  return 0;
+}
+
+// The front-end process: ICP-ftf per frame, odom, keyframes to the back end.
+int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
+  DdsDepthSubscriber subscriber(participant, o.dds);
+  DdsResultPublisher results(participant, o.dds);
+  const DdsKeyframeWriter keyframes(participant, o.dds);
+  PipelineFrontEnd front_end(o.pipeline);
+  Trajectory tracked;  // the front end's poses of the frames since the last keyframe
+  std::size_t sent = 0;
+  node::Progress progress;
+  const node::Outcome outcome = node::receive(
+      o.stop, [&](auto slice) { return subscriber.wait_frame(slice); },
+      [&](const Frame& frame) {
+        bool keyframe = false;
+        const PipelineFrame f = front_end.track(frame, &keyframe);
+        results.publish_odometry(f.front_end, f.icp_covariance);
+        if (!keyframe) {
+          tracked.push_back(f.front_end);
+        } else {
+          if (sent == 0 && !keyframes.wait_matched(o.backend_wait))
+            std::cerr << "jpcr_node: no back end on " << keyframe_topic_name(o.dds)
+                      << "; sending the keyframes anyway\n";
+          keyframes.publish(frame, f.front_end, f.icp_covariance, f.index, tracked);
+          tracked.clear();
+          ++sent;
+        }
+        progress.frame(f, sent, subscriber);
+        return node::Step::kProcessed;
+      });
+  progress.done();
+  std::cerr << "jpcr_node: " << node::rate_summary(outcome, "frames") << '\n';
+  keyframes.publish_end(static_cast<int>(outcome.processed), tracked);
+  const bool flushed = keyframes.flush(o.flush_timeout) && results.flush(o.flush_timeout);
+  if (!flushed) std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
+  std::cout << "processed " << outcome.processed << " frames, sent " << sent
+            << " keyframes and the end of stream; " << node::input_summary(subscriber)
+            << ", skipped " << outcome.skipped << " frames; stopped by " << outcome.reason << '\n';
+  return 0;
+}
+
+// The back-end process: keyframes in, J-ftf / J-full, re-anchoring, results out.
+int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
+  DdsKeyframeReader reader(participant, o.dds);
+  cli::PipelinePublisher publisher(participant, o.dds);
+  std::optional<PipelineBackEnd> back_end;
+  back_end.emplace(o.pipeline, [&](int keyframe, const Frame&, const QuadricMap& quadrics) {
+    publisher.keyframe_final(*back_end, keyframe, quadrics);
+  });
+  node::StopRules stop = o.stop;
+  stop.max_items = 0;  // --max-frames belongs to the front end; its end of stream stops us
+  node::Progress progress;
+  const node::Outcome outcome = node::receive(
+      stop, [&](auto slice) { return reader.wait(slice); },
+      [&](const DecodedKeyframe& k) {
+        const std::size_t first = static_cast<std::size_t>(k.frame_index) - k.tracked.size();
+        if (first != back_end->frames().size())
+          throw InputError("keyframe message for frames " + std::to_string(first) + ".." +
+                           std::to_string(k.frame_index) + " after frame " +
+                           std::to_string(back_end->frames().size()) +
+                           ": keyframes were lost (start the back end before the front end)");
+        for (std::size_t i = 0; i < k.tracked.size(); ++i) {
+          PipelineFrame f;
+          f.index = static_cast<int>(first + i);
+          f.front_end = k.tracked[i];
+          back_end->add(f, nullptr);
+        }
+        if (k.end_of_stream) return node::Step::kEndOfStream;
+        PipelineFrame f;
+        f.index = k.frame_index;
+        f.front_end = k.pose;
+        f.icp_covariance = k.covariance;
+        back_end->add(f, &k.frame);
+        publisher.path_if_refined(*back_end);
+        progress.keyframe(back_end->keyframes().size(), back_end->frames().size());
+        return node::Step::kProcessed;
+      });
+  progress.done();
+  if (!back_end->frames().empty()) {
+    back_end->finish();
+    publisher.finished(*back_end);
+  }
+  if (!publisher.flush(o.flush_timeout))
+    std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
+  std::cout << "refined " << back_end->keyframes().size() << " keyframes of "
+            << back_end->frames().size() << " frames, " << publisher.keyframes_published()
+            << " curvature maps; rejected " << reader.samples_rejected() << " samples, skipped "
+            << outcome.skipped << " messages; stopped by " << outcome.reason << '\n';
+  return 0;
 }
 
 int node_main(int argc, char** argv) {
@@ -40,98 +173,65 @@ int node_main(int argc, char** argv) {
       "refined-so-far pose with the front end's ICP covariance, zero for the first frame),\n"
       "keyframe_pose + curvature (32FC2) + curvature_color (rgb8) when a keyframe's map is\n"
       "final, and path (all refined poses, transient local) after every keyframe and at the\n"
-      "end. Malformed input samples are dropped with one log line each.\n"
-      "Stops on SIGINT/SIGTERM, --max-frames or --idle-timeout: finishes the pipeline,\n"
-      "publishes the final path, flushes and exits 0.");
-  args.option("method", "pipeline | icp-ftf | j-ftf | j-full | q-full (default: params)")
+      "end. Malformed input samples are dropped with one log line each; frames the node is too\n"
+      "slow for (more than dds.image_history_depth waiting) are dropped, counted and logged.\n"
+      "--role frontend / backend split the pipeline over two processes (two hosts) joined by\n"
+      "PREFIX keyframe: the front end publishes odom (its own poses) and sends each keyframe\n"
+      "(depth, camera, pose, the poses of the frames since the previous keyframe); the back\n"
+      "end refines and publishes keyframe_pose, curvature, curvature_color and path, the same\n"
+      "trajectory as --role all. Start the back end first; give both the same --params,\n"
+      "--method and --window.\n"
+      "Stops on SIGINT/SIGTERM, --max-frames, --idle-timeout or (back end) the front end's\n"
+      "end of stream: finishes the pipeline, publishes the final path, flushes and exits 0.");
+  args.option("role", "all | frontend | backend", "all")
+      .option("method", "pipeline | icp-ftf | j-ftf | j-full | q-full (default: params)")
       .option("window", "keyframes per J-full / Q-full window, 2-16 (default: params)")
-      .option("max-frames", "stop after N processed frames (0: no limit)", "0")
+      .option("max-frames", "stop after N processed frames (0: no limit; not the back end)", "0")
       .option("idle-timeout",
-              "stop when no frame arrived for S seconds after the first one (0: never)", "0")
-      .option("flush-timeout", "seconds to wait for the readers' acknowledgements at exit", "5");
+              "stop when no input arrived for S seconds after the first one (0: never)", "0")
+      .option("flush-timeout", "seconds to wait for the readers' acknowledgements at exit", "5")
+      .option("backend-wait",
+              "front end: seconds to wait for a back end before sending the first keyframe", "10");
   cli::add_dds_options(args);
   args.epilog(
-      "example:\n  export CYCLONEDDS_URI=file://$PWD/configs/cyclonedds_loopback.xml\n"
+      "examples:\n  export CYCLONEDDS_URI=file://$PWD/configs/cyclonedds_loopback.xml\n"
       "  jpcr_node --method j-ftf --idle-timeout 5 &\n"
       "  jpcr_dds_play --dataset seq --encoding 32FC1\n"
-      "  jpcr_dds_echo rt/jpcr/path --timeout 2");
+      "  jpcr_dds_echo rt/jpcr/path --timeout 2\n"
+      "split (the back end may run on another host of the same DDS domain):\n"
+      "  jpcr_node --role backend &\n"
+      "  jpcr_node --role frontend --idle-timeout 5 &\n"
+      "  jpcr_dds_play --dataset seq --encoding 32FC1");
   return cli::run_program("jpcr_node", [&] {
     if (!args.parse(argc, argv)) return 0;
-    Params params;
-    PipelineParams pipeline = cli::pipeline_params_from(args, &params);
-    const int max_frames = args.get_int("max-frames");
-    if (max_frames < 0) throw cli::UsageError("--max-frames must be >= 0");
-    const double idle_timeout = args.get_double("idle-timeout");
-    if (!(idle_timeout >= 0.0)) throw cli::UsageError("--idle-timeout must be >= 0");
+    const std::string role = args.get("role");
+    if (role != "all" && role != "frontend" && role != "backend")
+      throw cli::UsageError("--role must be all, frontend or backend, got '" + role + "'");
+    NodeOptions o;
+    o.pipeline = cli::pipeline_params_from(args);
+    o.stop.max_items = args.get_int("max-frames");
+    if (o.stop.max_items < 0) throw cli::UsageError("--max-frames must be >= 0");
+    o.stop.idle_timeout = args.get_double("idle-timeout");
+    if (!(o.stop.idle_timeout >= 0.0)) throw cli::UsageError("--idle-timeout must be >= 0");
     const double flush_timeout = args.get_double("flush-timeout");
     if (!(flush_timeout >= 0.0)) throw cli::UsageError("--flush-timeout must be >= 0");
-    pipeline.validate();
-    const DdsConfig dds = cli::dds_config_from(args);
+    o.flush_timeout = milliseconds_of(flush_timeout);
+    const double backend_wait = args.get_double("backend-wait");
+    if (!(backend_wait >= 0.0)) throw cli::UsageError("--backend-wait must be >= 0");
+    o.backend_wait = milliseconds_of(backend_wait);
+    o.pipeline.validate();
+    o.dds = cli::dds_config_from(args);
 
-    const DdsParticipant participant(dds);
-    DdsDepthSubscriber subscriber(participant, dds);
-    cli::PipelinePublisher publisher(participant, dds);
-    std::optional<KeyframePipeline> runner;
-    runner.emplace(pipeline, [&](int keyframe, const Frame&, const QuadricMap& quadrics) {
-      publisher.keyframe_final(*runner, keyframe, quadrics);
-    });
+    const DdsParticipant participant(o.dds);
     cli::install_stop_signal_handler();
-    std::cerr << "jpcr_node: method " << to_string(pipeline.method) << ", window "
-              << pipeline.window << ", listening on " << dds.depth_topic << " (domain "
-              << dds.domain_id << "), publishing " << dds.topic_prefix << "*\n";
-
-    const Clock::time_point start = Clock::now();
-    const bool terminal = isatty(2) != 0;
-    std::optional<Clock::time_point> last_frame;
-    std::size_t processed = 0, skipped = 0;
-    std::string reason = "signal";
-    constexpr std::chrono::milliseconds kSlice{100};  // signal and idle polling interval
-    while (!cli::stop_requested()) {
-      if (max_frames > 0 && processed >= static_cast<std::size_t>(max_frames)) {
-        reason = "--max-frames";
-        break;
-      }
-      std::optional<Frame> frame = subscriber.wait_frame(kSlice);
-      if (!frame) {
-        if (last_frame && idle_timeout > 0.0 && seconds_since(*last_frame) >= idle_timeout) {
-          reason = "--idle-timeout";
-          break;
-        }
-        continue;
-      }
-      last_frame = Clock::now();
-      const PipelineFrame* f = nullptr;
-      try {
-        f = &runner->add(*frame);
-      } catch (const InputError& e) {  // e.g. a frame of another size than the first
-        ++skipped;
-        std::cerr << "jpcr_node: skipped the frame at stamp " << frame->timestamp << ": "
-                  << e.what() << '\n';
-        continue;
-      }
-      publisher.frame_added(*runner, *f);
-      ++processed;
-      // On a terminal the line is rewritten in place; in a log: frames 1-10, then every 10th.
-      if (!terminal && processed > 10 && processed % 10 != 0) continue;
-      std::fprintf(stderr,
-                   "%sjpcr_node: frame %zu  keyframes %zu  icp %s%s  rejected %zu  %.1f s%s",
-                   terminal ? "\r" : "", processed, runner->keyframes().size(),
-                   to_string(f->icp_verdict), f->kept_last_motion ? " (kept last motion)" : "",
-                   subscriber.samples_rejected(), seconds_since(start), terminal ? "" : "\n");
-    }
-    if (terminal && processed > 0) std::fputc('\n', stderr);
-    if (processed > 0) {
-      runner->finish();
-      publisher.finished(*runner);
-    }
-    const bool flushed =
-        publisher.flush(std::chrono::milliseconds(static_cast<long long>(flush_timeout * 1000.0)));
-    if (!flushed) std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
-    std::cout << "processed " << processed << " frames, " << runner->keyframes().size()
-              << " keyframes, " << publisher.keyframes_published() << " curvature maps; rejected "
-              << subscriber.samples_rejected() << " samples, skipped " << skipped
-              << " frames; stopped by " << reason << '\n';
-    return 0;
+    std::cerr << "jpcr_node: role " << role << ", method " << to_string(o.pipeline.method)
+              << ", window " << o.pipeline.window << ", listening on "
+              << (role == "backend" ? keyframe_topic_name(o.dds) : o.dds.depth_topic) << " (domain "
+              << o.dds.domain_id << "), publishing " << o.dds.topic_prefix
+              << (role == "frontend" ? "odom, " + keyframe_topic_name(o.dds) : "*") << '\n';
+    if (role == "frontend") return run_frontend(o, participant);
+    if (role == "backend") return run_backend(o, participant);
+    return run_all(o, participant);
   });
 }
 

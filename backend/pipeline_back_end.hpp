@@ -1,0 +1,110 @@
+// The back end's half of the keyframe pipeline (architecture.md "Data flow"): it receives the
+// frames the front end tracked, with the depth of those the front end made keyframes, refines the
+// keyframes (J-ftf per keyframe pair, J-full / Q-full per window, method.md §6-§8) and re-anchors
+// every frame to its refined keyframe. KeyframePipeline (keyframe_pipeline.hpp) feeds it from the
+// front end in the same process; jpcr_node --role backend feeds it from the DDS keyframe topic.
+// Both hand it the same values, so both give the same trajectory.
+//
+//   PipelineBackEnd back_end(params, sink);
+//   for (...) back_end.add(tracked_frame, is_keyframe ? &frame : nullptr);
+//   back_end.finish();
+//   Trajectory refined = back_end.trajectory();
+//
+// Poses are camera-to-world (T_wc, method.md §1); the first frame's pose is the gauge.
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "jpcr/backend/refiner.hpp"
+#include "jpcr/frontend/keyframe_tracker.hpp"
+
+namespace jpcr {
+
+enum class PipelineMethod { kIcpFtf, kJointFtf, kJointFull, kFixedQuadrics, kPipeline };
+
+/// "icp-ftf", "j-ftf", "j-full", "q-full", "pipeline".
+const char* to_string(PipelineMethod method);
+/// Throws InputError listing the choices on an unknown name.
+PipelineMethod parse_pipeline_method(const std::string& name);
+
+struct PipelineParams {
+  PipelineMethod method = PipelineMethod::kPipeline;
+  int window = 5;  // keyframes per J-full / Q-full window (M, the reference included), 2 … 16
+  FrontendParams frontend;
+  JointParams joint;
+
+  void validate() const;  // throws InputError "field: problem"
+};
+
+/// One tracked frame.
+struct PipelineFrame {
+  int index = 0;
+  StampedPose front_end;  // the front end's T_wc (trajectory() gives the refined one)
+  int keyframe = 0;       // index into keyframes(): the keyframe the frame hangs on
+  IcpVerdict icp_verdict = IcpVerdict::ok;  // ok for the first frame
+  bool kept_last_motion = false;            // the front end extrapolated (alignment failed)
+  /// The front end's ICP covariance of the frame's alignment (IcpResult::covariance, over
+  /// x, y, z, rx, ry, rz); zero for the first frame, which is the gauge.
+  Matrix6d icp_covariance = Matrix6d::Zero();
+  double track_ms = 0.0;
+};
+
+/// One keyframe with what the back end did to it.
+struct PipelineKeyframe {
+  int frame = 0;          // index of its frame
+  StampedPose front_end;  // the front end's T_wc
+  StampedPose refined;    // T_wc after J-ftf / J-full
+  /// J-ftf against the previous keyframe (absent for the first keyframe and without J-ftf).
+  std::optional<RefinementReport> pair;
+  /// J-full / Q-full of the window this keyframe is the last frame of.
+  std::optional<RefinementReport> window;
+  bool used_front_end = false;  // a refinement failed here, so the front end's motion was kept
+  double refine_ms = 0.0;
+};
+
+/// Receives each keyframe's refined quadrics (curvature map) once no later step changes them:
+/// the keyframe index (into keyframes()) and its frame, for writers.
+using CurvatureSink =
+    std::function<void(int keyframe, const Frame& frame, const QuadricMap& quadrics)>;
+
+class PipelineBackEnd {
+ public:
+  explicit PipelineBackEnd(const PipelineParams& params = {}, CurvatureSink sink = {});
+  ~PipelineBackEnd();
+  PipelineBackEnd(const PipelineBackEnd&) = delete;
+  PipelineBackEnd& operator=(const PipelineBackEnd&) = delete;
+
+  /// Appends the next tracked frame (`tracked.index` = frames().size(); its `keyframe` field is
+  /// set here). `keyframe` is the frame's depth when the front end made it a keyframe (the first
+  /// frame always is), else null; a keyframe is refined when it completes a pair or a window.
+  const PipelineFrame& add(const PipelineFrame& tracked, const Frame* keyframe);
+  /// Refines what is left (the last partial window); call once after the last frame.
+  void finish();
+
+  /// The refined camera-to-world pose of every frame.
+  Trajectory trajectory() const;
+  Trajectory front_end_trajectory() const;
+  const std::vector<PipelineFrame>& frames() const { return frames_; }
+  const std::vector<PipelineKeyframe>& keyframes() const { return keyframes_; }
+  const PipelineParams& params() const { return params_; }
+
+ private:
+  struct Window;
+  void on_keyframe(const Frame& frame, const PipelineFrame& tracked);
+  void refine_pair();
+  void refine_window();
+  void emit_curvature(std::size_t slot, const QuadricMap& quadrics);
+
+  PipelineParams params_;
+  CurvatureSink sink_;
+  std::unique_ptr<Refiner> pair_refiner_, window_refiner_;
+  std::unique_ptr<Window> window_;
+  std::vector<PipelineFrame> frames_;
+  std::vector<PipelineKeyframe> keyframes_;
+};
+
+}  // namespace jpcr

@@ -1,0 +1,67 @@
+#include "jpcr/io/dds/dds_keyframe_link.hpp"
+
+#include <iostream>
+
+#include "jpcr/quadric/error.hpp"
+
+namespace jpcr {
+
+std::string keyframe_topic_name(const DdsConfig& config) {
+  return config.topic_prefix + "keyframe";
+}
+
+DdsQos keyframe_topic_qos() {
+  DdsQos qos;
+  qos.reliable = true;
+  qos.keep_all = true;
+  return qos;
+}
+
+DdsKeyframeWriter::DdsKeyframeWriter(const DdsParticipant& participant, const DdsConfig& config)
+    : config_(config), writer_(participant, keyframe_topic_name(config), keyframe_topic_qos()) {}
+
+void DdsKeyframeWriter::publish(const Frame& frame, const StampedPose& pose,
+                                const Matrix6d& covariance, int frame_index,
+                                const Trajectory& tracked) const {
+  // 32FC1 carries the float depth bit for bit; 16UC1 would round it to millimetres.
+  const KeyframeMessage message(frame, pose, covariance, DepthEncoding::kMetres32,
+                                config_.world_frame_id, config_.camera_frame_id, frame_index,
+                                tracked);
+  writer_.write(message.message());
+}
+
+void DdsKeyframeWriter::publish_end(int frames, const Trajectory& tracked) const {
+  const KeyframeMessage message(frames, tracked, config_.world_frame_id);
+  writer_.write(message.message());
+}
+
+DdsKeyframeReader::DdsKeyframeReader(const DdsParticipant& participant, const DdsConfig& config,
+                                     std::ostream* log)
+    : topic_(keyframe_topic_name(config)),
+      log_(log ? log : &std::cerr),
+      reader_(participant, topic_, keyframe_topic_qos()) {
+  limits_.max_bytes = config.max_image_bytes();
+  limits_.max_side = static_cast<std::uint32_t>(config.max_image_side);
+}
+
+void DdsKeyframeReader::poll() {
+  reader_.take([&](const RosKeyframe& m) {
+    try {
+      received_.push_back(decode_keyframe(m, limits_));
+    } catch (const InputError& e) {
+      ++rejected_;
+      *log_ << "jpcr dds: " << topic_ << ": rejected sample: " << e.what() << std::endl;
+    }
+  });
+}
+
+std::optional<DecodedKeyframe> DdsKeyframeReader::wait(std::chrono::milliseconds timeout) {
+  if (received_.empty()) poll();
+  if (received_.empty() && reader_.wait(timeout)) poll();
+  if (received_.empty()) return std::nullopt;
+  DecodedKeyframe k = std::move(received_.front());
+  received_.pop_front();
+  return k;
+}
+
+}  // namespace jpcr
