@@ -264,6 +264,24 @@ JointStep JointSystem::step(const JointState& state, const ReducedSystem& system
   return step_window(state, lambda, pose_steps);
 }
 
+std::vector<int> JointSystem::reference_inliers(const JointState& state) const {
+  std::vector<int> count(state.quadrics.size(), 0);
+  const int pattern_size = static_cast<int>(pattern_.size());
+#pragma omp parallel
+  with_sampler(sampling_, pattern_size, [&](auto& sampler) {
+#pragma omp for schedule(dynamic, kRowChunk)
+    for (int v = 0; v < height_; ++v)
+      for (int u = 0; u < width_; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
+        if (!state.valid[i]) continue;
+        const Quadricd& q = state.quadrics[i];
+        sampler.cost(q, views_[0], RigidMotion<double>{}, pattern_.data(), pattern_size, u, v,
+                     SampleGate<double>::at(params_.fit, q.center), count[i]);
+      }
+  });
+  return count;
+}
+
 bool JointSystem::solve_poses(const ReducedSystem& system, double lambda,
                               std::vector<Vector6d>& pose_steps) {
   Eigen::MatrixXd S = system.S;

@@ -84,12 +84,21 @@ void finish_report(const ReducedSystem& lin, bool estimate_quadrics, RefinementR
     out.covariance[static_cast<std::size_t>(j) + 1] = cov.block<6, 6>(6 * j, 6 * j);
 }
 
-QuadricMap refined_map(const QuadricMap& initial, const JointState& state) {
+// The refined quadrics; one that fits fewer than min_samples of its own samples (Quad IT's rule,
+// JointSystem::reference_inliers) is marked kTooFewSamples instead of reporting its curvature.
+QuadricMap refined_map(const QuadricMap& initial, const JointState& state,
+                       const JointSystem& system, bool estimate_quadrics) {
   QuadricMap map = initial;
+  if (!estimate_quadrics) return map;
+  const std::vector<int> inliers = system.reference_inliers(state);
   for (int v = 0; v < map.height(); ++v)
     for (int u = 0; u < map.width(); ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * map.width() + u;
-      if (state.valid[i]) map.set(u, v, state.quadrics[i].cast<float>());
+      if (!state.valid[i]) continue;
+      if (inliers[i] < system.params().fit.min_samples)
+        map.set_invalid(u, v, QuadricStatus::kTooFewSamples);
+      else
+        map.set(u, v, state.quadrics[i].cast<float>());
     }
   return map;
 }
@@ -164,7 +173,7 @@ RefinementResult refine_window(const std::vector<VertexMap>& vertices,
   report.damping = lambda;
   finish_report(system.linearize(state, 0.0), estimate_quadrics, out);
   out.poses = state.poses;
-  out.quadrics = refined_map(initial_quadrics, state);
+  out.quadrics = refined_map(initial_quadrics, state, system, estimate_quadrics);
   return out;
 }
 
