@@ -56,8 +56,9 @@ struct IcpParams {
   /// directions (a plane) from drifting.
   double damping = 1e-6;
   // Verdicts (IcpVerdict).
-  /// Pairs needed at the coarsest level that runs (160x120 for a 640x480 frame); finer levels
-  /// need proportionally more, by the number of pixels they sample. Fewer: `too_few_points`.
+  /// Pairs needed at the coarsest level that runs, for a 640x480 frame (whose coarsest level is
+  /// 160x120); smaller frames need proportionally fewer (by image area), finer levels
+  /// proportionally more (by the pixels they sample). Fewer: `too_few_points`.
   int min_inliers = 1000;
   double min_inlier_ratio = 0.25;      // final pairs / valid source points, else `too_few_points`
   double degeneracy_threshold = 1e-3;  // λmin/λmax of the unit-free JᵀWJ below this: degenerate

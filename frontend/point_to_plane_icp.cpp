@@ -202,6 +202,10 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
   if (coarsest < 0) return result;
   const auto stride_of = [&](int l) { return l == 0 ? params.level0_stride : 1; };
   const double base = samples(source.levels[coarsest], stride_of(coarsest));
+  // min_inliers is stated for a 640x480 frame: a smaller one has proportionally fewer pixels.
+  const CameraIntrinsics& full = source.levels[0].camera;
+  const double area_scale =
+      std::min(1.0, static_cast<double>(full.width) * full.height / (640.0 * 480.0));
 
   Eigen::Isometry3d T = initial;
   NormalEquations last;
@@ -210,7 +214,8 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
     const int iterations = params.iterations[l];
     if (iterations <= 0) continue;
     const int stride = stride_of(l);
-    const double needed = params.min_inliers * samples(source.levels[l], stride) / base;
+    const double needed =
+        std::max(6.0, params.min_inliers * area_scale * samples(source.levels[l], stride) / base);
     result.converged = false;
     for (int it = 0; it < iterations; ++it) {
       const NormalEquations eq =
