@@ -8,6 +8,7 @@
 //   j-ftf     J-ftf on every consecutive pair, chained
 //   j-full    J-full on windows of `window` consecutive frames, chained at shared end frames
 //   q-full    the same with the quadrics of each window's first frame fixed (Q-full)
+//   icp-bundle  the same windows refined by ICP-bundle (method.md §9; builds with Ceres only)
 //   pipeline  keyframes from the front end's policy, J-ftf per keyframe pair, J-full per window
 //
 //   KeyframePipeline pipeline(params);
@@ -29,18 +30,26 @@
 
 namespace jpcr {
 
-enum class PipelineMethod { kIcpFtf, kJointFtf, kJointFull, kFixedQuadrics, kPipeline };
+enum class PipelineMethod {
+  kIcpFtf,
+  kJointFtf,
+  kJointFull,
+  kFixedQuadrics,
+  kIcpBundle,
+  kPipeline
+};
 
-/// "icp-ftf", "j-ftf", "j-full", "q-full", "pipeline".
+/// "icp-ftf", "j-ftf", "j-full", "q-full", "icp-bundle", "pipeline".
 const char* to_string(PipelineMethod method);
 /// Throws InputError listing the choices on an unknown name.
 PipelineMethod parse_pipeline_method(const std::string& name);
 
 struct PipelineParams {
   PipelineMethod method = PipelineMethod::kPipeline;
-  int window = 5;  // keyframes per J-full / Q-full window (M, the reference included), 2 … 16
+  int window = 5;  // keyframes per J-full / Q-full / ICP-bundle window (M, reference included)
   FrontendParams frontend;
   JointParams joint;
+  IcpBundleParams icp_bundle;
 
   void validate() const;  // throws InputError "field: problem"
 };

@@ -43,7 +43,8 @@ int node_main(int argc, char** argv) {
       "end. Malformed input samples are dropped with one log line each.\n"
       "Stops on SIGINT/SIGTERM, --max-frames or --idle-timeout: finishes the pipeline,\n"
       "publishes the final path, flushes and exits 0.");
-  args.option("method", "pipeline | icp-ftf | j-ftf | j-full | q-full (default: params)")
+  args.option("method",
+              "pipeline | icp-ftf | j-ftf | j-full | q-full | icp-bundle (default: params)")
       .option("window", "keyframes per J-full / Q-full window, 2-16 (default: params)")
       .option("max-frames", "stop after N processed frames (0: no limit)", "0")
       .option("idle-timeout",
