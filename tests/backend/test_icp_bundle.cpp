@@ -10,7 +10,10 @@
 
 #include "joint_test_windows.hpp"
 #include "jpcr/backend/icp_bundle.hpp"
+#include "jpcr/backend/keyframe_pipeline.hpp"
 #include "jpcr/backend/point_to_plane_cost.hpp"
+#include "jpcr/io/synthetic_sequence.hpp"
+#include "jpcr/io/trajectory_metrics.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
@@ -114,6 +117,48 @@ TEST(PointToPlaneCost, AnalyticJacobianMatchesNumeric) {
     const double e = c.n.dot(se3_exp(xi_j).inverse() * se3_exp(xi_i) * c.X - c.q);
     EXPECT_NEAR(results.residuals[0], e, 1e-12);
   }
+}
+
+// jpcr_run --method icp-bundle --window 3: on a noise-free 160x120 walk of 5 frames the windows
+// {0,1,2} and {2,3,4} are refined (reported on their last keyframes), chained at frame 2, the
+// first pose stays the gauge, and the relative errors are below the front end's (measured
+// RMS relative translation: ICP-ftf 2.87 mm, ICP-bundle 0.17 mm).
+TEST(IcpBundle, PipelineWindowsChainAtTheirSharedFrames) {
+  SyntheticSequenceOptions o;
+  o.frames = 5;
+  o.width = 160;
+  o.height = 120;
+  o.seed = 4;
+  const SyntheticSequence seq = make_synthetic_sequence(o);
+  PipelineParams p;
+  p.method = PipelineMethod::kIcpBundle;
+  p.window = 3;
+  p.frontend.threads = 2;
+  int curvature_maps = 0;
+  KeyframePipeline pipeline(p, [&](int, const Frame&, const QuadricMap&) { ++curvature_maps; });
+  for (std::size_t i = 0; i < seq.size(); ++i)
+    pipeline.add(seq.load(i));
+  pipeline.finish();
+  const std::vector<PipelineKeyframe>& k = pipeline.keyframes();
+  ASSERT_EQ(k.size(), 5u);
+  for (int last : {2, 4}) {
+    ASSERT_TRUE(k[last].window.has_value());
+    EXPECT_EQ(k[last].window->method, "icp-bundle");
+    EXPECT_TRUE(k[last].window->converged()) << to_string(k[last].window->verdict);
+    EXPECT_FALSE(k[last].used_front_end);
+  }
+  EXPECT_FALSE(k[3].window.has_value());
+  EXPECT_EQ(curvature_maps, 5);  // Quad IT's: ICP-bundle refines no quadrics
+  const Trajectory refined = pipeline.trajectory();
+  EXPECT_TRUE(bitwise_equal(refined.front().pose, Eigen::Isometry3d::Identity()));
+  Trajectory gt = seq.ground_truth_trajectory();
+  for (StampedPose& s : gt)
+    s.pose = seq.ground_truth_trajectory().front().pose.inverse() * s.pose;
+  const RelativeErrors front = compute_relative_errors(gt, pipeline.front_end_trajectory());
+  const RelativeErrors bundle = compute_relative_errors(gt, refined);
+  std::printf("RMS relative translation: icp-ftf %.4g mm, icp-bundle %.4g mm\n",
+              front.translation_rms * 1e3, bundle.translation_rms * 1e3);
+  EXPECT_LT(bundle.translation_rms, front.translation_rms);
 }
 
 TEST(IcpBundle, RejectsBadInputAndParameters) {
