@@ -21,16 +21,10 @@ namespace {
 
 using test::JointTestWindow;
 using test::perturbed;
+using test::print_report;
 using test::pose_error;
 using test::render_window;
 
-void print_report(const RefinementReport& r) {
-  std::printf("%s: %s after %d steps (%d rejected), %ld terms, cost", r.method.c_str(),
-              to_string(r.verdict), r.iterations, r.rejected_steps, r.terms);
-  for (double c : r.cost)
-    std::printf(" %.4g", c);
-  std::printf("\n");
-}
 
 bool bitwise_equal(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
   return std::memcmp(a.matrix().data(), b.matrix().data(), 16 * sizeof(double)) == 0;

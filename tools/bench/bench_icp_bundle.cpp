@@ -4,40 +4,14 @@
 // Arguments: image width (height 3/4 of it), frames M, Ceres threads (0: one per core).
 #include <benchmark/benchmark.h>
 
+#include "bench_windows.hpp"
 #include "jpcr/backend/icp_bundle.hpp"
-#include "jpcr/io/synthetic_sequence.hpp"
 
 namespace {
 
-struct Window {
-  jpcr::CameraIntrinsics camera;
-  std::vector<jpcr::VertexMap> vertices;
-  std::vector<Eigen::Isometry3d> start;
-};
-
-Window make_window(int width, int frames) {
-  jpcr::SyntheticSequenceOptions options;
-  options.frames = frames;
-  options.noise = "range:1";
-  options.width = width;
-  options.height = width * 3 / 4;
-  const jpcr::SyntheticSequence seq = jpcr::make_synthetic_sequence(options);
-  Window w;
-  w.camera = seq.camera();
-  const Eigen::Isometry3d first = *seq.ground_truth(0);
-  jpcr::Vector6d offset;
-  offset << 0.006, -0.006, 0.006, 0.01, -0.01, 0.01;  // ≈ 1 cm, 1°
-  for (int j = 0; j < frames; ++j) {
-    const auto index = static_cast<std::size_t>(j);
-    w.vertices.push_back(jpcr::compute_vertex_map(seq.load(index).depth, w.camera));
-    const Eigen::Isometry3d T = first.inverse() * *seq.ground_truth(index);
-    w.start.push_back(j == 0 ? Eigen::Isometry3d::Identity() : jpcr::se3_exp(offset) * T);
-  }
-  return w;
-}
-
 void BM_IcpBundleWindow(benchmark::State& state) {
-  const Window w = make_window(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const jpcr::bench::BenchWindow w = jpcr::bench::make_bench_window(
+      static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   jpcr::IcpBundleParams params;
   params.threads = static_cast<int>(state.range(2));
   const jpcr::IcpBundle bundle(params);
