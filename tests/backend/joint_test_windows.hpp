@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -61,6 +62,11 @@ struct PoseError {
 inline PoseError pose_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {
   const Eigen::Isometry3d E = truth.inverse() * estimate;
   return {E.translation().norm(), rotation_angle(E.linear()) * 180.0 / M_PI};
+}
+
+/// The same pose to the last bit (a gauge or a pose left as given).
+inline bool bitwise_equal(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return std::memcmp(a.matrix().data(), b.matrix().data(), 16 * sizeof(double)) == 0;
 }
 
 /// One line per refinement: verdict, steps, what took part, the cost history.
