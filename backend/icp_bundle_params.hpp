@@ -23,8 +23,8 @@ struct IcpBundleParams {
   /// this fraction of i's samples project into image j onto a pixel with depth.
   double min_overlap = 0.3;
   /// Projective association (method.md §5), re-found before every solve: a pair is rejected when
-  /// the points are farther apart or the normals disagree more than this.
-  double max_distance = 0.05;     // m
+  /// the points are farther apart or the normals disagree more than this (ICP-ftf's gates).
+  double max_distance = 0.1;      // m
   double max_normal_angle = 30.0;  // deg
   int min_pair_terms = 100;        // associations a pair (i, j) needs in a solve to take part
   BundleLoss robust_loss = BundleLoss::huber;
