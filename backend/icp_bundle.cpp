@@ -24,11 +24,10 @@ void check_inputs(const std::vector<VertexMap>& vertices, const CameraIntrinsics
   if (vertices.size() < 2) throw std::invalid_argument("icp-bundle: needs two frames or more");
   for (std::size_t j = 0; j < vertices.size(); ++j)
     if (vertices[j].width() != camera.width || vertices[j].height() != camera.height)
-      throw std::invalid_argument("icp-bundle: frame " + std::to_string(j) + " is " +
-                                  std::to_string(vertices[j].width()) + "x" +
-                                  std::to_string(vertices[j].height()) + ", the camera " +
-                                  std::to_string(camera.width) + "x" +
-                                  std::to_string(camera.height));
+      throw std::invalid_argument(
+          "icp-bundle: frame " + std::to_string(j) + " is " + std::to_string(vertices[j].width()) +
+          "x" + std::to_string(vertices[j].height()) + ", the camera " +
+          std::to_string(camera.width) + "x" + std::to_string(camera.height));
   if (poses.size() != vertices.size())
     throw std::invalid_argument("icp-bundle: " + std::to_string(poses.size()) + " poses for " +
                                 std::to_string(vertices.size()) + " frames");
@@ -61,8 +60,9 @@ std::unique_ptr<ceres::LossFunction> make_loss(const IcpBundleParams& p) {
 ceres::Solver::Options solver_options(const IcpBundleParams& p) {
   ceres::Solver::Options o;
   o.max_num_iterations = p.solver_iterations;
-  o.num_threads = p.threads > 0 ? p.threads
-                                : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  o.num_threads = p.threads > 0
+                      ? p.threads
+                      : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   o.logging_type = ceres::SILENT;
   // 6 (M − 1) unknowns and many rows: the normal equations are small and dense.
   o.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;

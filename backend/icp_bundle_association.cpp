@@ -11,8 +11,8 @@ BundleFrame make_bundle_frame(const VertexMap& vertices, const IcpBundleParams& 
   BundleFrame f;
   f.vertices = &vertices;
   // The same support in the scene at every resolution: ±normal_offset px at 640 px width.
-  const int offset = std::max(
-      1, static_cast<int>(std::lround(params.normal_offset * vertices.width() / 640.0)));
+  const int offset =
+      std::max(1, static_cast<int>(std::lround(params.normal_offset * vertices.width() / 640.0)));
   f.normals = compute_normal_map(vertices, offset, params.normal_max_jump);
   return f;
 }

@@ -24,7 +24,7 @@ struct IcpBundleParams {
   double min_overlap = 0.3;
   /// Projective association (method.md §5), re-found before every solve: a pair is rejected when
   /// the points are farther apart or the normals disagree more than this (ICP-ftf's gates).
-  double max_distance = 0.1;      // m
+  double max_distance = 0.1;       // m
   double max_normal_angle = 30.0;  // deg
   int min_pair_terms = 100;        // associations a pair (i, j) needs in a solve to take part
   BundleLoss robust_loss = BundleLoss::huber;
@@ -33,7 +33,7 @@ struct IcpBundleParams {
   int solver_iterations = 10;  // Ceres iterations per solve (max_num_iterations)
   double translation_tolerance = 1e-5;  // m: converged when a whole solve moves every pose less
   double rotation_tolerance = 1e-5;     // rad: ... and turns it less than this
-  int threads = 0;  // Ceres threads; 0: one per core
+  int threads = 0;                      // Ceres threads; 0: one per core
 
   void validate() const;  // throws InputError "field: problem"
 };

@@ -30,14 +30,7 @@
 
 namespace jpcr {
 
-enum class PipelineMethod {
-  kIcpFtf,
-  kJointFtf,
-  kJointFull,
-  kFixedQuadrics,
-  kIcpBundle,
-  kPipeline
-};
+enum class PipelineMethod { kIcpFtf, kJointFtf, kJointFull, kFixedQuadrics, kIcpBundle, kPipeline };
 
 /// "icp-ftf", "j-ftf", "j-full", "q-full", "icp-bundle", "pipeline".
 const char* to_string(PipelineMethod method);

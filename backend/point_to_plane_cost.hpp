@@ -9,7 +9,8 @@
 // Tangent Jacobian. The manifold moves a pose by R ← exp(ω) R, t ← t + δt, its tangent being
 // (δ, δt) with ω = 2δ (Ceres' quaternion plus: [cos|δ|, sin|δ| δ/|δ|] ⊗ q). With r = R_i X,
 //     ∂e/∂(δt_i, ω_i) = [ n_wᵀ, (r × n_w)ᵀ ]            = PointToPlaneResidual::jacobian(r, n_w)
-//     ∂e/∂(δt_j, ω_j) = −[ n_wᵀ, ((a − t_j) × n_w)ᵀ ]   = −PointToPlaneResidual::jacobian(a − t_j, n_w)
+//     ∂e/∂(δt_j, ω_j) = −[ n_wᵀ, ((a − t_j) × n_w)ᵀ ]   = −PointToPlaneResidual::jacobian(a − t_j,
+//     n_w)
 // (for j, δe = (ω × n_w)ᵀ (a − t_j) − n_wᵀ δt).
 //
 // Ambient Jacobian (what Ceres asks of a cost function). Ceres multiplies it by the manifold's
@@ -28,7 +29,8 @@
 
 namespace jpcr {
 
-using PoseManifold = ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>;
+using PoseManifold =
+    ceres::ProductManifold<ceres::EigenQuaternionManifold, ceres::EuclideanManifold<3>>;
 
 /// The pose as the 7 numbers of PoseManifold, and back (the quaternion normalised).
 void to_pose_block(const Eigen::Isometry3d& T, double* block);

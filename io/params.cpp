@@ -205,7 +205,8 @@ void read_icp_bundle(YamlSection yaml, IcpBundleParams& p) {
 // Section `pipeline:` (backend/keyframe_pipeline.hpp).
 void read_pipeline(YamlSection yaml, PipelineParams& p) {
   std::string method = to_string(p.method);
-  yaml.read_choice("method", method, {"icp-ftf", "j-ftf", "j-full", "q-full", "icp-bundle", "pipeline"});
+  yaml.read_choice("method", method,
+                   {"icp-ftf", "j-ftf", "j-full", "q-full", "icp-bundle", "pipeline"});
   p.method = parse_pipeline_method(method);
   yaml.read("window", p.window);
   if (p.window < 2 || p.window > kMaxWindowFrames)

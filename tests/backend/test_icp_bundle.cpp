@@ -18,8 +18,8 @@ namespace {
 using test::bitwise_equal;
 using test::JointTestWindow;
 using test::perturbed;
-using test::print_report;
 using test::pose_error;
+using test::print_report;
 using test::render_window;
 
 // Frame 3 looks the other way: it overlaps neither frame 1 nor frame 2. It is reported and its
@@ -34,8 +34,7 @@ TEST(IcpBundle, ReportsAFrameThatOverlapsNoOtherAndLeavesItsPose) {
   const Eigen::Isometry3d first = test::look_from(scene.view.eye, scene.view.target);
   std::vector<VertexMap> vertices = w.vertices;
   vertices.push_back(compute_vertex_map(render(scene, camera, first * away).frame.depth, camera));
-  const std::vector<Eigen::Isometry3d> start = {w.truth[0], perturbed(w.truth[1], 0.01, 1.0),
-                                                away};
+  const std::vector<Eigen::Isometry3d> start = {w.truth[0], perturbed(w.truth[1], 0.01, 1.0), away};
   const RefinementResult r = IcpBundle().refine(vertices, camera, start);
   print_report(r.report);
   EXPECT_EQ(r.report.verdict, RefinementVerdict::kNoOverlap) << to_string(r.report.verdict);

@@ -16,8 +16,8 @@ namespace {
 using test::bitwise_equal;
 using test::JointTestWindow;
 using test::perturbed;
-using test::print_report;
 using test::pose_error;
+using test::print_report;
 using test::render_window;
 
 // Five noise-free 320x240 frames, T_2 … T_5 each 2 cm / 2° off (alternating directions).

@@ -114,11 +114,13 @@ TEST(Params, IcpBundleSection) {
   EXPECT_EQ(p.pipeline.icp_bundle.robust_loss, BundleLoss::cauchy);
   EXPECT_DOUBLE_EQ(p.pipeline.icp_bundle.min_overlap, 0.5);
   EXPECT_EQ(p.pipeline.method, PipelineMethod::kIcpBundle);
-  EXPECT_NE(error_of([] { parse_params("icp_bundle:\n  min_overlap: 0\n", "b.yaml"); })
-                .find("icp_bundle.min_overlap"),
+  EXPECT_NE(error_of([] {
+              parse_params("icp_bundle:\n  min_overlap: 0\n", "b.yaml");
+            }).find("icp_bundle.min_overlap"),
             std::string::npos);
-  EXPECT_NE(error_of([] { parse_params("icp_bundle:\n  robust_loss: tukey\n", "c.yaml"); })
-                .find("icp_bundle.robust_loss"),
+  EXPECT_NE(error_of([] {
+              parse_params("icp_bundle:\n  robust_loss: tukey\n", "c.yaml");
+            }).find("icp_bundle.robust_loss"),
             std::string::npos);
 }
 

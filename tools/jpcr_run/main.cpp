@@ -53,10 +53,8 @@ int run_main(int argc, char** argv) {
       .option("config", "camera YAML (default: the dataset's camera.yaml or rawlog intrinsics)")
       .option("method",
               "pipeline | icp-ftf | j-ftf | j-full | q-full | icp-bundle (default: params)")
-      .option("window",
-              "keyframes per J-full / Q-full / ICP-bundle window, 2-16 (default: params)")
-      .option("params",
-              "parameter YAML (sections frontend, quadric, joint, icp_bundle, pipeline)")
+      .option("window", "keyframes per J-full / Q-full / ICP-bundle window, 2-16 (default: params)")
+      .option("params", "parameter YAML (sections frontend, quadric, joint, icp_bundle, pipeline)")
       .option("frames", "FIRST:LAST, 0-based, LAST excluded (default: all)")
       .required("out", "output directory (created)")
       .flag("ply", "also write a PLY point cloud per keyframe");
