@@ -115,6 +115,8 @@ const char* to_string(RefinementVerdict verdict) {
       return "diverged";
     case RefinementVerdict::kTooFewQuadrics:
       return "too_few_quadrics";
+    case RefinementVerdict::kNoOverlap:
+      return "no_overlap";
   }
   return "unknown";
 }

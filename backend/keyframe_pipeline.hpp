@@ -8,6 +8,7 @@
 //   j-ftf     J-ftf on every consecutive pair, chained
 //   j-full    J-full on windows of `window` consecutive frames, chained at shared end frames
 //   q-full    the same with the quadrics of each window's first frame fixed (Q-full)
+//   icp-bundle  the same windows refined by ICP-bundle (method.md §9; builds with Ceres only)
 //   pipeline  keyframes from the front end's policy, J-ftf per keyframe pair, J-full per window
 //
 //   KeyframePipeline pipeline(params);

@@ -50,6 +50,8 @@ const char* to_string(PipelineMethod method) {
       return "j-full";
     case PipelineMethod::kFixedQuadrics:
       return "q-full";
+    case PipelineMethod::kIcpBundle:
+      return "icp-bundle";
     case PipelineMethod::kPipeline:
       return "pipeline";
   }
@@ -59,10 +61,10 @@ const char* to_string(PipelineMethod method) {
 PipelineMethod parse_pipeline_method(const std::string& name) {
   for (PipelineMethod m :
        {PipelineMethod::kIcpFtf, PipelineMethod::kJointFtf, PipelineMethod::kJointFull,
-        PipelineMethod::kFixedQuadrics, PipelineMethod::kPipeline})
+        PipelineMethod::kFixedQuadrics, PipelineMethod::kIcpBundle, PipelineMethod::kPipeline})
     if (name == to_string(m)) return m;
   throw InputError("unknown method '" + name +
-                   "' (choices: icp-ftf, j-ftf, j-full, q-full, pipeline)");
+                   "' (choices: icp-ftf, j-ftf, j-full, q-full, icp-bundle, pipeline)");
 }
 
 void PipelineParams::validate() const {
@@ -70,6 +72,7 @@ void PipelineParams::validate() const {
     throw InputError("window: must be in [2, " + std::to_string(kMaxWindowFrames) + "] keyframes");
   frontend.validate();
   joint.validate();
+  icp_bundle.validate();
 }
 
 PipelineBackEnd::PipelineBackEnd(const PipelineParams& params, CurvatureSink sink)
@@ -81,6 +84,8 @@ PipelineBackEnd::PipelineBackEnd(const PipelineParams& params, CurvatureSink sin
   if (m == PipelineMethod::kJointFull || m == PipelineMethod::kPipeline)
     window_refiner_ = make_refiner("j-full", params_.joint);
   if (m == PipelineMethod::kFixedQuadrics) window_refiner_ = make_refiner("q-full", params_.joint);
+  if (m == PipelineMethod::kIcpBundle)
+    window_refiner_ = make_refiner("icp-bundle", params_.joint, params_.icp_bundle);
 }
 
 PipelineBackEnd::~PipelineBackEnd() = default;
@@ -141,7 +146,8 @@ void PipelineBackEnd::refine_pair() {
   b.refine_ms += ms_since(t0);
 }
 
-// J-full (or Q-full) over the window; its first keyframe is the gauge (method.md §7, §8).
+// J-full (or Q-full, ICP-bundle) over the window; its first keyframe is the gauge (method.md §7,
+// §8, §9). ICP-bundle gives no quadrics: the reference keeps none and its curvature is Quad IT's.
 void PipelineBackEnd::refine_window() {
   const Clock::time_point t0 = Clock::now();
   const std::size_t n = window_->frames.size();

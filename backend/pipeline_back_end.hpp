@@ -24,18 +24,19 @@
 
 namespace jpcr {
 
-enum class PipelineMethod { kIcpFtf, kJointFtf, kJointFull, kFixedQuadrics, kPipeline };
+enum class PipelineMethod { kIcpFtf, kJointFtf, kJointFull, kFixedQuadrics, kIcpBundle, kPipeline };
 
-/// "icp-ftf", "j-ftf", "j-full", "q-full", "pipeline".
+/// "icp-ftf", "j-ftf", "j-full", "q-full", "icp-bundle", "pipeline".
 const char* to_string(PipelineMethod method);
 /// Throws InputError listing the choices on an unknown name.
 PipelineMethod parse_pipeline_method(const std::string& name);
 
 struct PipelineParams {
   PipelineMethod method = PipelineMethod::kPipeline;
-  int window = 5;  // keyframes per J-full / Q-full window (M, the reference included), 2 … 16
+  int window = 5;  // keyframes per J-full / Q-full / ICP-bundle window (M, reference included)
   FrontendParams frontend;
   JointParams joint;
+  IcpBundleParams icp_bundle;
 
   void validate() const;  // throws InputError "field: problem"
 };

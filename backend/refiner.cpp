@@ -3,6 +3,9 @@
 #include <stdexcept>
 
 #include "jpcr/backend/fixed_quadric_alignment.hpp"
+#ifdef JPCR_HAVE_CERES
+#include "jpcr/backend/icp_bundle.hpp"
+#endif
 #include "jpcr/backend/joint_frame_to_frame.hpp"
 #include "jpcr/backend/joint_window.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -19,18 +22,24 @@ bool same_camera(const CameraIntrinsics& a, const CameraIntrinsics& b) {
 
 }  // namespace
 
-RefinementResult Refiner::refine(const std::vector<Frame>& frames,
-                                 const std::vector<Eigen::Isometry3d>& initial_poses) const {
-  if (frames.empty()) throw std::invalid_argument(name() + ": no frames");
+std::vector<VertexMap> window_vertex_maps(const std::vector<Frame>& frames,
+                                          const std::string& method) {
+  if (frames.empty()) throw std::invalid_argument(method + ": no frames");
   const CameraIntrinsics& camera = frames[0].camera;
   std::vector<VertexMap> vertices;
   for (const Frame& f : frames) {
     if (!same_camera(f.camera, camera))
-      throw std::invalid_argument(name() + ": the frames differ in size or intrinsics");
+      throw std::invalid_argument(method + ": the frames differ in size or intrinsics");
     vertices.push_back(compute_vertex_map(f.depth, camera));  // throws on a size mismatch
   }
+  return vertices;
+}
+
+RefinementResult Refiner::refine(const std::vector<Frame>& frames,
+                                 const std::vector<Eigen::Isometry3d>& initial_poses) const {
+  const std::vector<VertexMap> vertices = window_vertex_maps(frames, name());
   const QuadricMap initial = QuadricFit(params().quadric).estimate(vertices[0]);
-  return refine(vertices, camera, initial_poses, initial);
+  return refine(vertices, frames[0].camera, initial_poses, initial);
 }
 
 JointFrameToFrame::JointFrameToFrame(const JointParams& params) : params_(params) {
@@ -56,11 +65,19 @@ RefinementResult FixedQuadricAlignment::refine(const std::vector<VertexMap>& ver
   return refine_window(vertices, camera, initial_poses, initial_quadrics, params_, false, name());
 }
 
-std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams& params) {
+std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams& params,
+                                      const IcpBundleParams& bundle) {
   if (name == "j-ftf") return std::make_unique<JointFrameToFrame>(params);
   if (name == "j-full") return std::make_unique<JointWindow>(params);
   if (name == "q-full") return std::make_unique<FixedQuadricAlignment>(params);
-  throw InputError("refiner: '" + name + "' is not one of j-ftf, j-full, q-full");
+#ifdef JPCR_HAVE_CERES
+  if (name == "icp-bundle") return std::make_unique<IcpBundle>(bundle);
+#else
+  (void)bundle;
+  if (name == "icp-bundle")
+    throw InputError("refiner: icp-bundle needs Ceres, which this build (JPCR_CORE_ONLY) lacks");
+#endif
+  throw InputError("refiner: '" + name + "' is not one of j-ftf, j-full, q-full, icp-bundle");
 }
 
 }  // namespace jpcr

@@ -5,7 +5,8 @@
 // Poses follow method.md §1: T_j maps frame j into the reference frame 1, and T_1 = I is fixed
 // (the gauge). A pipeline holding camera-to-world poses passes T_j = T_w1⁻¹ T_wj. The refiners
 // are J-ftf (JointFrameToFrame, "j-ftf"), J-full (JointWindow, "j-full") and Q-full
-// (FixedQuadricAlignment, "q-full"); make_refiner picks one by name.
+// (FixedQuadricAlignment, "q-full") and, in builds with Ceres, ICP-bundle (IcpBundle,
+// "icp-bundle", method.md §9); make_refiner picks one by name.
 #pragma once
 
 #include <memory>
@@ -14,6 +15,7 @@
 
 #include <Eigen/Geometry>
 
+#include "jpcr/backend/icp_bundle_params.hpp"
 #include "jpcr/backend/joint_params.hpp"
 #include "jpcr/quadric/frame.hpp"
 #include "jpcr/quadric/quadric_map.hpp"
@@ -26,21 +28,25 @@ enum class RefinementVerdict {
   kMaxIterations,   // still moving after max_iterations accepted steps
   kDiverged,        // the cost could not be lowered (damping ran away) or became non-finite
   kTooFewQuadrics,  // too few quadrics are seen in another frame (no overlap) or a pose is unseen
+  kNoOverlap,       // ICP-bundle: a frame overlaps no frame tied to the reference (isolated)
 };
 
-/// "converged", "max_iterations", "diverged", "too_few_quadrics".
+/// "converged", "max_iterations", "diverged", "too_few_quadrics", "no_overlap".
 const char* to_string(RefinementVerdict verdict);
 
 /// Whether a result can be trusted (architecture.md: every result says so).
 struct RefinementReport {
-  std::string method;  // "j-ftf", "j-full" or "q-full"
+  std::string method;  // "j-ftf", "j-full", "q-full" or "icp-bundle"
   RefinementVerdict verdict = RefinementVerdict::kDiverged;
   int iterations = 0;              // accepted steps
   int rejected_steps = 0;          // steps that raised the cost (then damped and retried)
-  std::vector<double> cost;        // Σ w r² (m²) at the start and after each accepted step
+  std::vector<double> cost;        // Σ w r² (m²) at the start and after each accepted step;
+                                   // icp-bundle: Σ ρ(e²) at the start and after each solve
   int active_quadrics = 0;         // quadrics taking part at the end
-  std::vector<int> seen;           // per pose T_2 … T_M: active quadrics that frame sees
+  std::vector<int> seen;           // per pose T_2 … T_M: active quadrics that frame sees;
+                                   // icp-bundle: residuals that involve the frame
   long terms = 0;                  // residual terms inside the gate at the end
+  std::vector<int> isolated;       // icp-bundle: frames (window index) left as given
   double residual_variance = 0.0;  // m²: final cost / (terms − unknowns)
   double damping = 0.0;            // λ at the end
   double degeneracy = 0.0;         // smallest / largest eigenvalue of the reduced system S
@@ -62,8 +68,8 @@ class Refiner {
   /// From depth frames (frames[0] is the reference): vertex maps, Quad IT on the reference
   /// (the initial quadrics), then the refinement. Throws std::invalid_argument when the frames
   /// differ in size or intrinsics, or the poses do not match them.
-  RefinementResult refine(const std::vector<Frame>& frames,
-                          const std::vector<Eigen::Isometry3d>& initial_poses) const;
+  virtual RefinementResult refine(const std::vector<Frame>& frames,
+                                  const std::vector<Eigen::Isometry3d>& initial_poses) const;
 
   /// From vertex maps and initial quadrics on vertices[0] (e.g. Quad IT from the GPU).
   virtual RefinementResult refine(const std::vector<VertexMap>& vertices,
@@ -75,7 +81,14 @@ class Refiner {
   virtual const JointParams& params() const = 0;
 };
 
-/// "j-ftf", "j-full" or "q-full"; throws InputError naming the choices otherwise.
-std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams& params = {});
+/// The frames' vertex maps; throws std::invalid_argument (naming `method`) when there are none
+/// or they differ in size or intrinsics.
+std::vector<VertexMap> window_vertex_maps(const std::vector<Frame>& frames,
+                                          const std::string& method);
+
+/// "j-ftf", "j-full", "q-full" or "icp-bundle" (`bundle` its parameters); throws InputError
+/// naming the choices otherwise, and for "icp-bundle" in a build without Ceres.
+std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams& params = {},
+                                      const IcpBundleParams& bundle = {});
 
 }  // namespace jpcr

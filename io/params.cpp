@@ -181,10 +181,33 @@ void read_joint(YamlSection yaml, JointParams& p) {
   validate_in(yaml, p);
 }
 
+// Section `icp_bundle:` (backend/icp_bundle_params.hpp).
+void read_icp_bundle(YamlSection yaml, IcpBundleParams& p) {
+  yaml.read("grid_stride", p.grid_stride);
+  yaml.read("normal_offset", p.normal_offset);
+  yaml.read("normal_max_jump", p.normal_max_jump);
+  yaml.read("min_overlap", p.min_overlap);
+  yaml.read("max_distance", p.max_distance);
+  yaml.read("max_normal_angle", p.max_normal_angle);
+  yaml.read("min_pair_terms", p.min_pair_terms);
+  std::string loss = to_string(p.robust_loss);
+  yaml.read_choice("robust_loss", loss, {"huber", "cauchy"});
+  p.robust_loss = parse_bundle_loss(loss);
+  yaml.read("robust_scale", p.robust_scale);
+  yaml.read("outer_iterations", p.outer_iterations);
+  yaml.read("solver_iterations", p.solver_iterations);
+  yaml.read("translation_tolerance", p.translation_tolerance);
+  yaml.read("rotation_tolerance", p.rotation_tolerance);
+  yaml.read("threads", p.threads);
+  yaml.finish();
+  validate_in(yaml, p);
+}
+
 // Section `pipeline:` (backend/keyframe_pipeline.hpp).
 void read_pipeline(YamlSection yaml, PipelineParams& p) {
   std::string method = to_string(p.method);
-  yaml.read_choice("method", method, {"icp-ftf", "j-ftf", "j-full", "q-full", "pipeline"});
+  yaml.read_choice("method", method,
+                   {"icp-ftf", "j-ftf", "j-full", "q-full", "icp-bundle", "pipeline"});
   p.method = parse_pipeline_method(method);
   yaml.read("window", p.window);
   if (p.window < 2 || p.window > kMaxWindowFrames)
@@ -210,11 +233,13 @@ Params parse_params(const std::string& text, const std::string& path) {
   read_quadric(yaml.section("quadric"), params.quadric);
   read_dds_config(yaml.section("dds"), params.dds);
   read_joint(yaml.section("joint"), params.joint);
+  read_icp_bundle(yaml.section("icp_bundle"), params.icp_bundle);
   read_pipeline(yaml.section("pipeline"), params.pipeline);
   yaml.finish();
   params.joint.quadric = params.quadric;
   params.pipeline.frontend = params.frontend;
   params.pipeline.joint = params.joint;
+  params.pipeline.icp_bundle = params.icp_bundle;
   return params;
 }
 

@@ -33,7 +33,9 @@ struct Params {
   QuadricParams quadric;    // section `quadric:` (pattern, normals, Quad IT)
   DdsConfig dds;            // section `dds:` (io/dds/dds_config.hpp)
   JointParams joint;  // section `joint:` (J-ftf, J-full, Q-full); its quadric part is `quadric:`
-  /// Section `pipeline:`: method and window; its frontend and joint parts are those sections.
+  IcpBundleParams icp_bundle;  // section `icp_bundle:` (ICP-bundle, method.md §9)
+  /// Section `pipeline:`: method and window; its frontend, joint and icp_bundle parts are those
+  /// sections.
   PipelineParams pipeline;
 };
 

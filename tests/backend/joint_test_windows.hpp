@@ -3,10 +3,13 @@
 #pragma once
 
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
 #include "../quadric/quadric_test_scenes.hpp"
+#include "jpcr/backend/refiner.hpp"
 #include "jpcr/io/synthetic_scene.hpp"
 #include "jpcr/quadric/se3.hpp"
 
@@ -59,6 +62,20 @@ struct PoseError {
 inline PoseError pose_error(const Eigen::Isometry3d& estimate, const Eigen::Isometry3d& truth) {
   const Eigen::Isometry3d E = truth.inverse() * estimate;
   return {E.translation().norm(), rotation_angle(E.linear()) * 180.0 / M_PI};
+}
+
+/// The same pose to the last bit (a gauge or a pose left as given).
+inline bool bitwise_equal(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b) {
+  return std::memcmp(a.matrix().data(), b.matrix().data(), 16 * sizeof(double)) == 0;
+}
+
+/// One line per refinement: verdict, steps, what took part, the cost history.
+inline void print_report(const RefinementReport& r) {
+  std::printf("%s: %s after %d steps (%d rejected), %d quadrics, %ld terms, cost", r.method.c_str(),
+              to_string(r.verdict), r.iterations, r.rejected_steps, r.active_quadrics, r.terms);
+  for (double c : r.cost)
+    std::printf(" %.4g", c);
+  std::printf("\n");
 }
 
 }  // namespace jpcr::test

@@ -17,16 +17,9 @@ namespace {
 
 using test::JointTestWindow;
 using test::perturbed;
+using test::print_report;
 using test::pose_error;
 using test::render_window;
-
-void print_report(const RefinementReport& r) {
-  std::printf("%s: %s after %d steps (%d rejected), %d quadrics, cost", r.method.c_str(),
-              to_string(r.verdict), r.iterations, r.rejected_steps, r.active_quadrics);
-  for (double c : r.cost)
-    std::printf(" %.4g", c);
-  std::printf("\n");
-}
 
 // Noise-free 320x240 pair, T₂ 2 cm / 2° off: measured 0.016 mm / 0.0008° after 6 steps (the
 // residual error is the quadric model's ρ⁴ bias on the balls, not noise); the bound is

@@ -97,5 +97,32 @@ TEST(Params, DefaultFileLoadsAndUnknownKeysAreErrors) {
   EXPECT_DOUBLE_EQ(load_params(empty).dataset.max_time_difference, 0.02);
 }
 
+// Section icp_bundle: the shipped defaults are the struct's, keys map onto it and reach the
+// pipeline, bad values name the key.
+TEST(Params, IcpBundleSection) {
+  const Params shipped = load_params(kConfigs + "default.yaml");
+  const IcpBundleParams defaults;
+  EXPECT_EQ(shipped.icp_bundle.grid_stride, defaults.grid_stride);
+  EXPECT_DOUBLE_EQ(shipped.icp_bundle.min_overlap, defaults.min_overlap);
+  EXPECT_DOUBLE_EQ(shipped.icp_bundle.robust_scale, defaults.robust_scale);
+  EXPECT_EQ(shipped.icp_bundle.outer_iterations, defaults.outer_iterations);
+  const Params p = parse_params(
+      "icp_bundle:\n  grid_stride: 2\n  robust_loss: cauchy\n  min_overlap: 0.5\n"
+      "pipeline:\n  method: icp-bundle\n",
+      "p.yaml");
+  EXPECT_EQ(p.icp_bundle.grid_stride, 2);
+  EXPECT_EQ(p.pipeline.icp_bundle.robust_loss, BundleLoss::cauchy);
+  EXPECT_DOUBLE_EQ(p.pipeline.icp_bundle.min_overlap, 0.5);
+  EXPECT_EQ(p.pipeline.method, PipelineMethod::kIcpBundle);
+  EXPECT_NE(error_of([] {
+              parse_params("icp_bundle:\n  min_overlap: 0\n", "b.yaml");
+            }).find("icp_bundle.min_overlap"),
+            std::string::npos);
+  EXPECT_NE(error_of([] {
+              parse_params("icp_bundle:\n  robust_loss: tukey\n", "c.yaml");
+            }).find("icp_bundle.robust_loss"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace jpcr

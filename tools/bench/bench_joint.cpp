@@ -5,9 +5,9 @@
 // poses 1 cm / 1° off the truth. Arguments: image width (height 3/4 of it), frames M.
 #include <benchmark/benchmark.h>
 
+#include "bench_windows.hpp"
 #include "jpcr/backend/joint_params.hpp"
 #include "jpcr/backend/joint_system.hpp"
-#include "jpcr/io/synthetic_sequence.hpp"
 #include "jpcr/quadric/quadric_fit.hpp"
 
 namespace {
@@ -19,23 +19,11 @@ struct Window {
 };
 
 Window make_window(int width, int frames) {
-  jpcr::SyntheticSequenceOptions options;
-  options.frames = frames;
-  options.noise = "range:1";
-  options.width = width;
-  options.height = width * 3 / 4;
-  const jpcr::SyntheticSequence seq = jpcr::make_synthetic_sequence(options);
+  jpcr::bench::BenchWindow b = jpcr::bench::make_bench_window(width, frames);
   Window w;
-  w.camera = seq.camera();
-  const Eigen::Isometry3d first = *seq.ground_truth(0);
-  jpcr::Vector6d offset;
-  offset << 0.006, -0.006, 0.006, 0.01, -0.01, 0.01;  // ≈ 1 cm, 1°
-  for (int j = 0; j < frames; ++j) {
-    const jpcr::Frame f = seq.load(static_cast<std::size_t>(j));
-    w.vertices.push_back(jpcr::compute_vertex_map(f.depth, w.camera));
-    const Eigen::Isometry3d T = first.inverse() * *seq.ground_truth(static_cast<std::size_t>(j));
-    w.state.poses.push_back(j == 0 ? Eigen::Isometry3d::Identity() : jpcr::se3_exp(offset) * T);
-  }
+  w.camera = b.camera;
+  w.vertices = std::move(b.vertices);
+  w.state.poses = std::move(b.start);
   const jpcr::QuadricMap map = jpcr::QuadricFit().estimate(w.vertices[0]);
   for (std::size_t i = 0; i < map.status.size(); ++i) {
     w.state.quadrics.push_back(map.quadrics[i].cast<double>());

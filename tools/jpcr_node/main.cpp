@@ -184,7 +184,8 @@ int node_main(int argc, char** argv) {
       "Stops on SIGINT/SIGTERM, --max-frames, --idle-timeout or (back end) the front end's\n"
       "end of stream: finishes the pipeline, publishes the final path, flushes and exits 0.");
   args.option("role", "all | frontend | backend", "all")
-      .option("method", "pipeline | icp-ftf | j-ftf | j-full | q-full (default: params)")
+      .option("method",
+              "pipeline | icp-ftf | j-ftf | j-full | q-full | icp-bundle (default: params)")
       .option("window", "keyframes per J-full / Q-full window, 2-16 (default: params)")
       .option("max-frames", "stop after N processed frames (0: no limit; not the back end)", "0")
       .option("idle-timeout",

@@ -44,14 +44,17 @@ int run_main(int argc, char** argv) {
       "each keyframe against the previous one jointly with per-pixel quadrics, J-full refines\n"
       "windows of keyframes, and every frame is re-anchored to its refined keyframe\n"
       "(--method pipeline). The paper's methods also run alone, on every consecutive frame:\n"
-      "icp-ftf, j-ftf, j-full and q-full. Writes OUT/trajectory.txt (TUM, refined),\n"
+      "icp-ftf, j-ftf, j-full, q-full and icp-bundle (the point-to-plane bundle adjustment\n"
+      "baseline over the same sliding windows as j-full, solved with Ceres; section icp_bundle\n"
+      "of --params). Writes OUT/trajectory.txt (TUM, refined),\n"
       "OUT/front_end.txt (ICP-ftf), OUT/keyframes.txt, OUT/curvature/<stamp>.npy and\n"
       "OUT/curvature_png/<stamp>.png per keyframe (J-ftf/J-full quadrics), OUT/report.json.");
   args.required("dataset", "TUM directory (jpcr_synth writes one) or MRPT .rawlog")
       .option("config", "camera YAML (default: the dataset's camera.yaml or rawlog intrinsics)")
-      .option("method", "pipeline | icp-ftf | j-ftf | j-full | q-full (default: params)")
-      .option("window", "keyframes per J-full / Q-full window, 2-16 (default: params)")
-      .option("params", "parameter YAML (sections frontend, quadric, joint, pipeline)")
+      .option("method",
+              "pipeline | icp-ftf | j-ftf | j-full | q-full | icp-bundle (default: params)")
+      .option("window", "keyframes per J-full / Q-full / ICP-bundle window, 2-16 (default: params)")
+      .option("params", "parameter YAML (sections frontend, quadric, joint, icp_bundle, pipeline)")
       .option("frames", "FIRST:LAST, 0-based, LAST excluded (default: all)")
       .required("out", "output directory (created)")
       .flag("ply", "also write a PLY point cloud per keyframe");

@@ -25,6 +25,8 @@ void write_refinement(JsonWriter& json, const char* name,
       .field("active_quadrics", r->active_quadrics)
       .field("residual_variance", r->residual_variance)
       .field("degeneracy", r->degeneracy)
+      .field("isolated_frames",  // icp-bundle: window frames left as given (no overlap)
+             std::vector<double>(r->isolated.begin(), r->isolated.end()))
       .end_object();
 }
 
