@@ -2,9 +2,11 @@
 # The GPU check in one command (issue 7), for the GPU machine (Ubuntu 24.04, CMake 4.x, gcc 13,
 # nvcc 13; Eigen, GTest, Google Benchmark, yaml-cpp and CUDA only):
 #   configure the core profile with CUDA for sm_90, build the GPU targets, run the GPU tests
-#   (ctest label gpu, plus device selection), compute-sanitizer memcheck and initcheck on the GPU
-#   test binary, then print the benchmark table. A summary comes last; the exit status is 0 only
-#   when every step passed.
+#   (ctest label gpu: Quad IT and J-ftf parity, plus device selection), compute-sanitizer
+#   memcheck and initcheck on both GPU test binaries, then print the benchmark tables (Quad IT,
+#   J-ftf). A summary comes last; the exit status is 0 only when every step passed. Every step
+#   has a time limit (JPCR_STEP_LIMIT, default 240 s; the build 420 s) so the whole check fits
+#   a 10-minute lease on 16 cores.
 #
 #   tools/gpu-check.sh [--all]       --all builds and runs every core target and test too
 # Environment: JPCR_GPU_BUILD_DIR (default build-gpu), JPCR_CUDA_ARCH (default 90),
@@ -59,19 +61,22 @@ step configure cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DJPCR_CORE_ONL
   -DCMAKE_CUDA_ARCHITECTURES="$arch" -DCMAKE_POLICY_VERSION_MINIMUM=3.5 \
   ${JPCR_CMAKE_ARGS:-} || finish
 
-targets=(--target test_cuda_quadric_fit test_device_selection bench_cuda_quadric)
+targets=(--target test_cuda_quadric_fit test_cuda_joint_ftf test_device_selection
+  bench_cuda_quadric bench_cuda_joint)
 [ "$all" = 1 ] && targets=()
-step build cmake --build "$build" -j"$jobs" "${targets[@]}" || finish
+limit=${JPCR_STEP_LIMIT:-240}
+step build timeout 420 cmake --build "$build" -j"$jobs" "${targets[@]}" || finish
 
 # JPCR_CUDA_SYNC=1 (also set by ctest for the gpu label): every launch is synchronised and checked.
 export JPCR_CUDA_SYNC=1
-step gpu-tests ctest --test-dir "$build" -L gpu --output-on-failure --no-tests=error
+step gpu-tests timeout "$limit" ctest --test-dir "$build" -L gpu --output-on-failure \
+  --no-tests=error -j2
 # A skipped GPU test on the GPU machine is a failure: the GPU was not found.
 if grep -q "Skipped" "$logs/gpu-tests.log"; then
   summary+=("FAIL  gpu-tests skipped (no GPU visible?)")
   failed=1
 fi
-step device-selection "$build/tests/cuda/test_device_selection"
+step device-selection timeout "$limit" "$build/tests/cuda/test_device_selection"
 if [ "$all" = 1 ]; then
   step all-tests ctest --test-dir "$build" --output-on-failure -j"$jobs"
 fi
@@ -80,12 +85,18 @@ sanitizer=/usr/local/cuda/bin/compute-sanitizer
 [ -x "$sanitizer" ] || sanitizer=$(command -v compute-sanitizer || true)
 if [ -n "$sanitizer" ]; then
   for tool in memcheck initcheck; do
-    step "sanitizer-$tool" "$sanitizer" --tool "$tool" --error-exitcode 1 \
+    step "sanitizer-$tool" timeout "$limit" "$sanitizer" --tool "$tool" --error-exitcode 1 \
       "$build/tests/cuda/test_cuda_quadric_fit"
+    # J-ftf: one iteration against the CPU and three short refinements (the kernels, every
+    # buffer); the full refinement parity test adds only more of the same launches.
+    step "sanitizer-$tool-jftf" timeout "$limit" "$sanitizer" --tool "$tool" --error-exitcode 1 \
+      "$build/tests/cuda/test_cuda_joint_ftf" \
+      --gtest_filter='*OneIterationEqualsTheCpuReference:*ReusesDeviceBuffersAcrossPairs'
   done
 else
   summary+=("SKIP  compute-sanitizer (not found)")
 fi
 
-step benchmark "$build/tools/bench/bench_cuda_quadric" --runs 30
+step benchmark timeout "$limit" "$build/tools/bench/bench_cuda_quadric" --runs 30
+step benchmark-jftf timeout "$limit" "$build/tools/bench/bench_cuda_joint" --runs 30
 finish

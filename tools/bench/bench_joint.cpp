@@ -5,47 +5,14 @@
 // poses 1 cm / 1° off the truth. Arguments: image width (height 3/4 of it), frames M.
 #include <benchmark/benchmark.h>
 
+#include "joint_bench_window.hpp"
 #include "jpcr/backend/joint_params.hpp"
-#include "jpcr/backend/joint_system.hpp"
-#include "jpcr/io/synthetic_sequence.hpp"
-#include "jpcr/quadric/quadric_fit.hpp"
 
 namespace {
 
-struct Window {
-  jpcr::CameraIntrinsics camera;
-  std::vector<jpcr::VertexMap> vertices;
-  jpcr::JointState state;
-};
-
-Window make_window(int width, int frames) {
-  jpcr::SyntheticSequenceOptions options;
-  options.frames = frames;
-  options.noise = "range:1";
-  options.width = width;
-  options.height = width * 3 / 4;
-  const jpcr::SyntheticSequence seq = jpcr::make_synthetic_sequence(options);
-  Window w;
-  w.camera = seq.camera();
-  const Eigen::Isometry3d first = *seq.ground_truth(0);
-  jpcr::Vector6d offset;
-  offset << 0.006, -0.006, 0.006, 0.01, -0.01, 0.01;  // ≈ 1 cm, 1°
-  for (int j = 0; j < frames; ++j) {
-    const jpcr::Frame f = seq.load(static_cast<std::size_t>(j));
-    w.vertices.push_back(jpcr::compute_vertex_map(f.depth, w.camera));
-    const Eigen::Isometry3d T = first.inverse() * *seq.ground_truth(static_cast<std::size_t>(j));
-    w.state.poses.push_back(j == 0 ? Eigen::Isometry3d::Identity() : jpcr::se3_exp(offset) * T);
-  }
-  const jpcr::QuadricMap map = jpcr::QuadricFit().estimate(w.vertices[0]);
-  for (std::size_t i = 0; i < map.status.size(); ++i) {
-    w.state.quadrics.push_back(map.quadrics[i].cast<double>());
-    w.state.valid.push_back(map.status[i] == jpcr::QuadricStatus::kValid ? 1 : 0);
-  }
-  return w;
-}
-
 void run(benchmark::State& state, bool estimate_quadrics) {
-  const Window w = make_window(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const jpcr::bench::JointBenchWindow w = jpcr::bench::make_joint_window(
+      static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const jpcr::JointParams params;
   const jpcr::NeighbourhoodPattern pattern = params.quadric.pattern.for_width(w.camera.width);
   const jpcr::JointSystem system(w.vertices, w.camera, pattern, params.terms(estimate_quadrics));
