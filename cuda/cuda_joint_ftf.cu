@@ -317,6 +317,13 @@ void CudaJointSystem::launch_linearize(double lambda) {
 ReducedSystem CudaJointSystem::linearize(double lambda) {
   Device& d = *device_;
   const cudaStream_t stream = d.stream;
+  if (d.pixels() == 0) {  // an empty frame (or nothing loaded): no quadric takes part
+    ReducedSystem none;
+    none.S = Eigen::MatrixXd::Zero(6, 6);
+    none.s = none.A_diagonal = Eigen::VectorXd::Zero(6);
+    none.seen = {0};
+    return none;
+  }
   d.record(0);
   if (poison_) {
     poison(d.factors, kFactors * d.pixels(), stream);
@@ -371,6 +378,7 @@ double CudaJointSystem::propose(const ReducedSystem& /*system*/, double /*lambda
   candidate_poses_ = {Eigen::Isometry3d::Identity(), T};
   Device& d = *device_;
   const cudaStream_t stream = d.stream;
+  if (d.pixels() == 0) return 0.0;
   d.record(2);
   if (poison_) {
     poison(d.candidate, d.pixels(), stream);
