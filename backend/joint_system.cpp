@@ -264,19 +264,22 @@ JointStep JointSystem::step(const JointState& state, const ReducedSystem& system
   return step_window(state, lambda, pose_steps);
 }
 
-std::vector<int> JointSystem::reference_inliers(const JointState& state) const {
+std::vector<int> reference_inliers(const VertexMap& reference, const NeighbourhoodPattern& pattern,
+                                   const JointTermParams& params, const JointState& state) {
+  const int width = reference.width(), height = reference.height();
+  const int pattern_size = static_cast<int>(pattern.size());
+  const VertexView view{reference.data(), width, height};
   std::vector<int> count(state.quadrics.size(), 0);
-  const int pattern_size = static_cast<int>(pattern_.size());
 #pragma omp parallel
-  with_sampler(sampling_, pattern_size, [&](auto& sampler) {
+  with_sampler(JointSampling::kGathered, pattern_size, [&](auto& sampler) {
 #pragma omp for schedule(dynamic, kRowChunk)
-    for (int v = 0; v < height_; ++v)
-      for (int u = 0; u < width_; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * width_ + u;
+    for (int v = 0; v < height; ++v)
+      for (int u = 0; u < width; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * width + u;
         if (!state.valid[i]) continue;
         const Quadricd& q = state.quadrics[i];
-        sampler.cost(q, views_[0], RigidMotion<double>{}, pattern_.data(), pattern_size, u, v,
-                     SampleGate<double>::at(params_.fit, q.center), count[i]);
+        sampler.cost(q, view, RigidMotion<double>{}, pattern.offsets.data(), pattern_size, u, v,
+                     SampleGate<double>::at(params.fit, q.center), count[i]);
       }
   });
   return count;

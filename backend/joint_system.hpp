@@ -78,11 +78,6 @@ class JointSystem {
   static bool solve_poses(const ReducedSystem& system, double lambda,
                           std::vector<Vector6d>& pose_steps);
 
-  /// Per pixel, the reference frame's samples inside the gate of its quadric at `state` (0 where
-  /// the pixel has none): a refined quadric that no longer fits min_samples of its own samples
-  /// has left the surface (the gate made the move cost-free) and is not a curvature estimate.
-  std::vector<int> reference_inliers(const JointState& state) const;
-
   /// Back-substitutes Δγ_p for the poses' step and evaluates the cost of the candidate,
   /// re-associated at the new poses. `system` and λ are those of linearize(state, λ): J-ftf
   /// uses the factors kept in `system`, larger windows recompute each quadric's system.
@@ -107,5 +102,11 @@ class JointSystem {
   JointSampling sampling_ = JointSampling::kGathered;
   int width_ = 0, height_ = 0;
 };
+
+/// Per pixel, the samples of `reference` inside the gate of its quadric in `state` (0 where the
+/// pixel has none): a refined quadric that no longer fits min_samples of its own samples has
+/// left the surface (the gate made the move cost-free) and is not a curvature estimate.
+std::vector<int> reference_inliers(const VertexMap& reference, const NeighbourhoodPattern& pattern,
+                                   const JointTermParams& params, const JointState& state);
 
 }  // namespace jpcr

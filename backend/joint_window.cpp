@@ -1,109 +1,8 @@
 #include "jpcr/backend/joint_window.hpp"
 
-#include <algorithm>
-#include <cmath>
-#include <stdexcept>
-#include <string>
-
-#include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
-
-#include "jpcr/backend/joint_system.hpp"
+#include "jpcr/backend/joint_problem.hpp"
 
 namespace jpcr {
-
-namespace {
-
-void check_inputs(const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
-                  const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& quadrics) {
-  if (vertices.size() < 2)
-    throw std::invalid_argument("joint refinement: needs two frames or more");
-  if (vertices.size() > static_cast<std::size_t>(kMaxWindowFrames))
-    throw std::invalid_argument("joint refinement: more than " + std::to_string(kMaxWindowFrames) +
-                                " frames in one window");
-  for (std::size_t j = 0; j < vertices.size(); ++j)
-    if (vertices[j].width() != camera.width || vertices[j].height() != camera.height)
-      throw std::invalid_argument(
-          "joint refinement: frame " + std::to_string(j) + " is " +
-          std::to_string(vertices[j].width()) + "x" + std::to_string(vertices[j].height()) +
-          ", the camera " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
-  if (poses.size() != vertices.size())
-    throw std::invalid_argument("joint refinement: " + std::to_string(poses.size()) +
-                                " poses for " + std::to_string(vertices.size()) + " frames");
-  if (!poses[0].matrix().isApprox(Eigen::Matrix4d::Identity(), 1e-9))
-    throw std::invalid_argument("joint refinement: the first pose is the gauge and must be I");
-  if (quadrics.width() != camera.width || quadrics.height() != camera.height)
-    throw std::invalid_argument("joint refinement: the quadric map differs in size from frame 0");
-}
-
-JointState initial_state(const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& map) {
-  JointState s;
-  s.poses = poses;
-  s.poses[0] = Eigen::Isometry3d::Identity();
-  s.quadrics.resize(map.status.size());
-  s.valid.resize(map.status.size());
-  for (std::size_t i = 0; i < map.status.size(); ++i) {
-    s.valid[i] = map.status[i] == QuadricStatus::kValid ? 1 : 0;
-    s.quadrics[i] = map.quadrics[i].cast<double>();
-  }
-  return s;
-}
-
-bool too_few(const ReducedSystem& lin, const JointParams& p) {
-  if (lin.active < p.min_active_quadrics) return true;
-  return std::any_of(lin.seen.begin(), lin.seen.end(),
-                     [&](int n) { return n < p.min_active_quadrics; });
-}
-
-bool below_tolerance(const std::vector<Vector6d>& steps, const JointParams& p) {
-  for (const Vector6d& d : steps)
-    if (d.head<3>().norm() >= p.translation_tolerance || d.tail<3>().norm() >= p.rotation_tolerance)
-      return false;
-  return true;
-}
-
-// The covariance σ² S⁻¹ of the poses at the final, undamped linearisation, and the degeneracy
-// measure λ_min / λ_max of S.
-void finish_report(const ReducedSystem& lin, bool estimate_quadrics, RefinementResult& out) {
-  const int n = static_cast<int>(lin.s.size());
-  RefinementReport& r = out.report;
-  r.active_quadrics = lin.active;
-  r.seen = lin.seen;
-  r.terms = lin.terms;
-  out.covariance.assign(static_cast<std::size_t>(n / 6 + 1), Matrix6d::Zero());
-  const long unknowns = n + (estimate_quadrics ? 6L * lin.active : 0L);
-  if (lin.terms <= unknowns || lin.active == 0) return;
-  r.residual_variance = lin.cost / static_cast<double>(lin.terms - unknowns);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(lin.S, Eigen::EigenvaluesOnly);
-  const double top = eig.eigenvalues().maxCoeff();
-  r.degeneracy = top > 0.0 ? std::max(0.0, eig.eigenvalues().minCoeff()) / top : 0.0;
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(lin.S);
-  if (ldlt.info() != Eigen::Success || !(r.degeneracy > 0.0)) return;
-  const Eigen::MatrixXd cov = r.residual_variance * ldlt.solve(Eigen::MatrixXd::Identity(n, n));
-  for (int j = 0; j < n / 6; ++j)
-    out.covariance[static_cast<std::size_t>(j) + 1] = cov.block<6, 6>(6 * j, 6 * j);
-}
-
-// The refined quadrics; one that fits fewer than min_samples of its own samples (Quad IT's rule,
-// JointSystem::reference_inliers) is marked kTooFewSamples instead of reporting its curvature.
-QuadricMap refined_map(const QuadricMap& initial, const JointState& state,
-                       const JointSystem& system, bool estimate_quadrics) {
-  QuadricMap map = initial;
-  if (!estimate_quadrics) return map;
-  const std::vector<int> inliers = system.reference_inliers(state);
-  for (int v = 0; v < map.height(); ++v)
-    for (int u = 0; u < map.width(); ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * map.width() + u;
-      if (!state.valid[i]) continue;
-      if (inliers[i] < system.params().fit.min_samples)
-        map.set_invalid(u, v, QuadricStatus::kTooFewSamples);
-      else
-        map.set(u, v, state.quadrics[i].cast<float>());
-    }
-  return map;
-}
-
-}  // namespace
 
 const char* to_string(RefinementVerdict verdict) {
   switch (verdict) {
@@ -126,57 +25,12 @@ RefinementResult refine_window(const std::vector<VertexMap>& vertices,
                                const std::vector<Eigen::Isometry3d>& initial_poses,
                                const QuadricMap& initial_quadrics, const JointParams& params,
                                bool estimate_quadrics, const std::string& method) {
-  check_inputs(vertices, camera, initial_poses, initial_quadrics);
+  check_joint_inputs(vertices, camera, initial_poses, initial_quadrics);
   const JointSystem system(vertices, camera, params.quadric.pattern.for_width(camera.width),
                            params.terms(estimate_quadrics));
-  JointState state = initial_state(initial_poses, initial_quadrics);
-  RefinementResult out;
-  RefinementReport& report = out.report;
-  report.method = method;
-  double lambda = params.initial_damping;
-  ReducedSystem lin = system.linearize(state, lambda);
-  report.cost.push_back(lin.cost);
-  report.verdict = RefinementVerdict::kMaxIterations;
-  if (too_few(lin, params)) report.verdict = RefinementVerdict::kTooFewQuadrics;
-  while (report.verdict == RefinementVerdict::kMaxIterations &&
-         report.iterations < params.max_iterations) {
-    std::vector<Vector6d> pose_steps;
-    const bool solved = JointSystem::solve_poses(lin, lambda, pose_steps);
-    if (solved) {
-      JointStep step = system.step(state, lin, lambda, pose_steps);
-      const bool small = below_tolerance(pose_steps, params);
-      if (std::isfinite(step.cost) && step.cost <= lin.cost) {  // accept
-        state = std::move(step.candidate);
-        ++report.iterations;
-        lambda = std::max(lambda / params.damping_decrease, 1e-12);
-        lin = system.linearize(state, lambda);
-        report.cost.push_back(lin.cost);
-        if (too_few(lin, params))
-          report.verdict = RefinementVerdict::kTooFewQuadrics;
-        else if (small)
-          report.verdict = RefinementVerdict::kConverged;
-        continue;
-      }
-      ++report.rejected_steps;
-      // A step below the tolerances that does not lower the cost: the state is a minimum at the
-      // resolution the tolerances ask for.
-      if (small) {
-        report.verdict = RefinementVerdict::kConverged;
-        break;
-      }
-    }
-    lambda *= params.damping_factor;
-    if (lambda > params.max_damping || !std::isfinite(lin.cost)) {
-      report.verdict = RefinementVerdict::kDiverged;
-      break;
-    }
-    lin = system.linearize(state, lambda);
-  }
-  report.damping = lambda;
-  finish_report(system.linearize(state, 0.0), estimate_quadrics, out);
-  out.poses = state.poses;
-  out.quadrics = refined_map(initial_quadrics, state, system, estimate_quadrics);
-  return out;
+  CpuJointProblem problem(system, initial_joint_state(initial_poses, initial_quadrics));
+  return run_joint_refinement(problem, params, estimate_quadrics, method, initial_quadrics,
+                              vertices[0]);
 }
 
 JointWindow::JointWindow(const JointParams& params) : params_(params) {

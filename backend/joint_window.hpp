@@ -23,9 +23,8 @@ class JointWindow final : public Refiner {
   JointParams params_;
 };
 
-/// The shared Levenberg-Marquardt loop (method.md §6 "Update"): linearise, solve the reduced
-/// system, back-substitute, accept the step only when Σ w r² does not increase (else raise λ on
-/// diag A and diag C_p and retry). estimate_quadrics = false is Q-full.
+/// The CPU refinement of a window: JointSystem under the shared Levenberg-Marquardt loop
+/// run_joint_refinement (joint_problem.hpp). estimate_quadrics = false is Q-full.
 RefinementResult refine_window(const std::vector<VertexMap>& vertices,
                                const CameraIntrinsics& camera,
                                const std::vector<Eigen::Isometry3d>& initial_poses,

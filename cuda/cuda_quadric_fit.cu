@@ -16,6 +16,7 @@
 
 #include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/device_memory.hpp"
+#include "jpcr/cuda/stream_events.hpp"
 #include "jpcr/quadric/plane_normal_kernel.hpp"
 #include "jpcr/quadric/quadric_fit_kernel.hpp"
 
@@ -164,9 +165,7 @@ void poison(Image<T>& image) {
 }  // namespace
 
 // The stream, the timing events and the buffers, sized for the largest frame seen so far.
-struct CudaQuadricFit::Device {
-  cudaStream_t stream = nullptr;
-  cudaEvent_t events[5] = {};  // start, uploaded, normals, fitted, downloaded
+struct CudaQuadricFit::Device : StreamEvents<5> {  // start, uploaded, normals, fitted, downloaded
   DeviceArray<Eigen::Vector3f> vertices, normals, direction;
   DeviceArray<Quadric> quadrics;
   DeviceArray<Eigen::Vector2f> curvature;
@@ -176,34 +175,10 @@ struct CudaQuadricFit::Device {
   bool poison_outputs = false;
   CudaQuadricFitTiming timing;
 
-  Device() {
-    try {
-      JPCR_CUDA_CHECK(cudaStreamCreateWithFlags(&stream, cudaStreamNonBlocking));
-      for (cudaEvent_t& e : events)
-        JPCR_CUDA_CHECK(cudaEventCreate(&e));
-    } catch (...) {
-      destroy();
-      throw;
-    }
-  }
-  ~Device() { destroy(); }
-
-  void destroy() noexcept {
-    for (cudaEvent_t& e : events)
-      if (e != nullptr) cudaEventDestroy(e);
-    if (stream != nullptr) cudaStreamDestroy(stream);
-  }
-
   void reserve(std::size_t pixels, std::size_t pattern_size) {
     allocations += vertices.reserve(pixels) + normals.reserve(pixels) + direction.reserve(pixels) +
                    quadrics.reserve(pixels) + curvature.reserve(pixels) + status.reserve(pixels);
     if (pattern_size > kParameterPatternCapacity) allocations += pattern.reserve(pattern_size);
-  }
-
-  float elapsed_ms(int from, int to) const {
-    float ms = 0.0f;
-    JPCR_CUDA_CHECK(cudaEventElapsedTime(&ms, events[from], events[to]));
-    return ms;
   }
 };
 
@@ -235,7 +210,7 @@ QuadricMap CudaQuadricFit::fit(const VertexMap& vertices, const NormalMap* norma
   Device& d = *device_;
   d.reserve(pixels, pattern_size);
   const cudaStream_t stream = d.stream;
-  JPCR_CUDA_CHECK(cudaEventRecord(d.events[0], stream));
+  d.record(0);
   upload(d.vertices, vertices.data(), pixels, stream);
   if (normals != nullptr) upload(d.normals, normals->data(), pixels, stream);
   if (pattern_size > kParameterPatternCapacity)
@@ -246,7 +221,7 @@ QuadricMap CudaQuadricFit::fit(const VertexMap& vertices, const NormalMap* norma
     poison(d.direction, pixels, stream);
     poison(d.status, pixels, stream);
   }
-  JPCR_CUDA_CHECK(cudaEventRecord(d.events[1], stream));
+  d.record(1);
 
   const VertexView view{d.vertices.data(), width, height};
   if (normals == nullptr) {
@@ -254,7 +229,7 @@ QuadricMap CudaQuadricFit::fit(const VertexMap& vertices, const NormalMap* norma
         view, params_.normals, d.normals.data());
     JPCR_CUDA_CHECK_LAUNCH("plane_normals");
   }
-  JPCR_CUDA_CHECK(cudaEventRecord(d.events[2], stream));
+  d.record(2);
 
   const QuadricMapView out{d.quadrics.data(), d.curvature.data(), d.direction.data(),
                            d.status.data()};
@@ -262,7 +237,7 @@ QuadricMap CudaQuadricFit::fit(const VertexMap& vertices, const NormalMap* norma
     launch_quad_it<double>(pattern, d.pattern, view, d.normals.data(), params_.fit, out, stream);
   else
     launch_quad_it<float>(pattern, d.pattern, view, d.normals.data(), params_.fit, out, stream);
-  JPCR_CUDA_CHECK(cudaEventRecord(d.events[3], stream));
+  d.record(3);
 
   QuadricMap map(width, height);  // the host allocation overlaps the kernel
   if (d.poison_outputs) {
@@ -275,7 +250,7 @@ QuadricMap CudaQuadricFit::fit(const VertexMap& vertices, const NormalMap* norma
   download(map.curvature.data(), d.curvature, pixels, stream);
   download(map.direction.data(), d.direction, pixels, stream);
   download(map.status.data(), d.status, pixels, stream);
-  JPCR_CUDA_CHECK(cudaEventRecord(d.events[4], stream));
+  d.record(4);
   JPCR_CUDA_CHECK(cudaStreamSynchronize(stream));
   d.timing = {d.elapsed_ms(0, 1), d.elapsed_ms(1, 2), d.elapsed_ms(2, 3), d.elapsed_ms(3, 4),
               d.elapsed_ms(0, 4)};

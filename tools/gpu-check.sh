@@ -2,9 +2,15 @@
 # The GPU check in one command (issue 7), for the GPU machine (Ubuntu 24.04, CMake 4.x, gcc 13,
 # nvcc 13; Eigen, GTest, Google Benchmark, yaml-cpp and CUDA only):
 #   configure the core profile with CUDA for sm_90, build the GPU targets, run the GPU tests
-#   (ctest label gpu, plus device selection), compute-sanitizer memcheck and initcheck on the GPU
-#   test binary, then print the benchmark table. A summary comes last; the exit status is 0 only
-#   when every step passed.
+#   (ctest label gpu: Quad IT and J-ftf parity, plus device selection), time the benchmark
+#   tables (bench_cuda_quadric, bench_cuda_joint), run compute-sanitizer memcheck and initcheck
+#   on both GPU test binaries, then print the tables again and a summary last; the exit status is
+#   0 only when every step passed.
+# Time: the whole check stays inside JPCR_GPU_CHECK_BUDGET seconds (default 570, a 10-minute
+# lease): every step runs under `timeout` with its own limit (build 420 s, others
+# JPCR_STEP_LIMIT, default 240 s) cut to what is left of the budget; a step with no time left
+# fails as "out of time". The steps are ordered by what a run must show: tests, then tables,
+# then the sanitizers.
 #
 #   tools/gpu-check.sh [--all]       --all builds and runs every core target and test too
 # Environment: JPCR_GPU_BUILD_DIR (default build-gpu), JPCR_CUDA_ARCH (default 90),
@@ -14,6 +20,8 @@ cd "$(dirname "$0")/.." || exit 1
 
 build=${JPCR_GPU_BUILD_DIR:-build-gpu}
 arch=${JPCR_CUDA_ARCH:-90}
+budget=${JPCR_GPU_CHECK_BUDGET:-570}
+limit=${JPCR_STEP_LIMIT:-240}
 jobs=$(nproc)
 all=0
 [ "${1:-}" = "--all" ] && all=1
@@ -22,22 +30,32 @@ mkdir -p "$logs"
 
 declare -a summary=()
 failed=0
-step() {  # step NAME COMMAND...: runs it, logs it, records PASS/FAIL
-  local name=$1
-  shift
-  echo "==== $name: $*"
+step() {  # step NAME LIMIT COMMAND...: runs it under timeout, logs it, records PASS/FAIL
+  local name=$1 seconds=$2
+  shift 2
+  local left=$((budget - SECONDS))
+  if [ "$left" -lt 10 ]; then
+    summary+=("FAIL  $name (out of time: the ${budget} s budget is spent)")
+    failed=1
+    return 1
+  fi
+  [ "$seconds" -gt "$left" ] && seconds=$left
+  echo "==== $name (limit ${seconds} s): $*"
   local start=$SECONDS
-  if "$@" 2>&1 | tee "$logs/$name.log"; then
+  if timeout "$seconds" "$@" 2>&1 | tee "$logs/$name.log"; then
     summary+=("PASS  $name ($((SECONDS - start)) s)")
   else
-    summary+=("FAIL  $name ($((SECONDS - start)) s, log $logs/$name.log)")
+    summary+=("FAIL  $name ($((SECONDS - start)) s of ${seconds}, log $logs/$name.log)")
     failed=1
     return 1
   fi
 }
 finish() {
+  for table in benchmark benchmark-jftf; do
+    [ -f "$logs/$table.log" ] && { echo; cat "$logs/$table.log"; }
+  done
   echo
-  echo "==== gpu-check summary ($(date -u +%FT%TZ))"
+  echo "==== gpu-check summary ($(date -u +%FT%TZ), ${SECONDS} s)"
   printf '%s\n' "${summary[@]}"
   if [ "$failed" = 0 ]; then echo "gpu-check: OK"; else echo "gpu-check: FAILED"; fi
   exit "$failed"
@@ -54,38 +72,46 @@ fi
 # CMAKE_POLICY_VERSION_MINIMUM: CMake 4 refuses package files written for CMake < 3.5; jpcr
 # itself asks for 3.22, and CMake 3.x ignores the setting.
 # shellcheck disable=SC2086
-step configure cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DJPCR_CORE_ONLY=ON \
+step configure 120 cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release -DJPCR_CORE_ONLY=ON \
   -DJPCR_WITH_DDS=OFF -DJPCR_WITH_CUDA=ON -DCMAKE_CUDA_COMPILER="$nvcc" \
   -DCMAKE_CUDA_ARCHITECTURES="$arch" -DCMAKE_POLICY_VERSION_MINIMUM=3.5 \
   ${JPCR_CMAKE_ARGS:-} || finish
 
-targets=(--target test_cuda_quadric_fit test_device_selection bench_cuda_quadric)
+targets=(--target test_cuda_quadric_fit test_cuda_joint_ftf test_device_selection
+  bench_cuda_quadric bench_cuda_joint)
 [ "$all" = 1 ] && targets=()
-step build cmake --build "$build" -j"$jobs" "${targets[@]}" || finish
+step build 420 cmake --build "$build" -j"$jobs" "${targets[@]}" || finish
 
 # JPCR_CUDA_SYNC=1 (also set by ctest for the gpu label): every launch is synchronised and checked.
 export JPCR_CUDA_SYNC=1
-step gpu-tests ctest --test-dir "$build" -L gpu --output-on-failure --no-tests=error
+step gpu-tests "$limit" ctest --test-dir "$build" -L gpu --output-on-failure --no-tests=error -j2
 # A skipped GPU test on the GPU machine is a failure: the GPU was not found.
 if grep -q "Skipped" "$logs/gpu-tests.log"; then
   summary+=("FAIL  gpu-tests skipped (no GPU visible?)")
   failed=1
 fi
-step device-selection "$build/tests/cuda/test_device_selection"
+step device-selection "$limit" "$build/tests/cuda/test_device_selection"
 if [ "$all" = 1 ]; then
-  step all-tests ctest --test-dir "$build" --output-on-failure -j"$jobs"
+  step all-tests "$limit" ctest --test-dir "$build" --output-on-failure -j"$jobs"
 fi
+
+# The tables run with synchronous checks off: they time the asynchronous pipeline.
+JPCR_CUDA_SYNC=0 step benchmark "$limit" "$build/tools/bench/bench_cuda_quadric" --runs 30
+JPCR_CUDA_SYNC=0 step benchmark-jftf "$limit" "$build/tools/bench/bench_cuda_joint" --runs 30
 
 sanitizer=/usr/local/cuda/bin/compute-sanitizer
 [ -x "$sanitizer" ] || sanitizer=$(command -v compute-sanitizer || true)
 if [ -n "$sanitizer" ]; then
   for tool in memcheck initcheck; do
-    step "sanitizer-$tool" "$sanitizer" --tool "$tool" --error-exitcode 1 \
+    step "sanitizer-$tool" "$limit" "$sanitizer" --tool "$tool" --error-exitcode 1 \
       "$build/tests/cuda/test_cuda_quadric_fit"
+    # J-ftf: one iteration against the CPU and three short refinements (the kernels, every
+    # buffer); the full refinement parity test adds only more of the same launches.
+    step "sanitizer-$tool-jftf" "$limit" "$sanitizer" --tool "$tool" --error-exitcode 1 \
+      "$build/tests/cuda/test_cuda_joint_ftf" \
+      --gtest_filter='*OneIterationEqualsTheCpuReference:*ReusesDeviceBuffersAcrossPairs'
   done
 else
   summary+=("SKIP  compute-sanitizer (not found)")
 fi
-
-step benchmark "$build/tools/bench/bench_cuda_quadric" --runs 30
 finish

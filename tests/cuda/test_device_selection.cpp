@@ -1,12 +1,15 @@
 // `device: auto | cpu | cuda` (issue 7): parsing, one log line saying which device was chosen,
-// a clear error for cuda without a GPU, and the estimator the factory builds. Runs with and
-// without a GPU; each test checks the branch the machine takes.
+// a clear error for cuda without a GPU, and the estimator and refiner the factories build. Runs
+// with and without a GPU; each test checks the branch the machine takes.
 #include <sstream>
 
 #include <gtest/gtest.h>
 
+#include "jpcr/backend/joint_frame_to_frame.hpp"
+#include "jpcr/backend/joint_window.hpp"
 #include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/curvature_estimator_factory.hpp"
+#include "jpcr/cuda/refiner_factory.hpp"
 #include "jpcr/io/params.hpp"
 #include "jpcr/quadric/error.hpp"
 
@@ -90,6 +93,26 @@ TEST(DeviceSelection, TheFactoryBuildsTheEstimatorOfTheChosenDevice) {
   const auto any = make_curvature_estimator(ComputeDevice::kAuto, QuadricParams{}, log);
   EXPECT_EQ(any->name(), cuda_device_available() ? "quad-it-cuda" : "quad-it");
   EXPECT_EQ(lines(log.str()), 2);
+}
+
+TEST(DeviceSelection, JFtfRunsOnTheChosenDeviceTheOtherRefinersOnTheCpu) {
+  std::ostringstream log;
+  const auto cpu = make_refiner("j-ftf", JointParams{}, ComputeDevice::kCpu, log);
+  EXPECT_NE(dynamic_cast<const JointFrameToFrame*>(cpu.get()), nullptr);
+  EXPECT_EQ(log.str(), "jpcr: device cpu -> cpu (requested)\n");
+  log.str("");
+  const auto any = make_refiner("j-ftf", JointParams{}, ComputeDevice::kAuto, log);
+  EXPECT_EQ(any->name(), "j-ftf");
+  EXPECT_EQ(dynamic_cast<const JointFrameToFrame*>(any.get()) == nullptr, cuda_device_available());
+  EXPECT_EQ(lines(log.str()), 1) << log.str();
+  log.str("");
+  const auto window = make_refiner("j-full", JointParams{}, ComputeDevice::kCuda, log);
+  EXPECT_NE(dynamic_cast<const JointWindow*>(window.get()), nullptr);
+  EXPECT_EQ(log.str(), "jpcr: j-full has no GPU version; device cuda -> cpu\n");
+  EXPECT_THROW(make_refiner("icp", JointParams{}, ComputeDevice::kAuto, log), InputError);
+  if (!cuda_device_available()) {
+    EXPECT_THROW(make_refiner("j-ftf", JointParams{}, ComputeDevice::kCuda, log), CudaError);
+  }
 }
 
 TEST(DeviceSelection, TheParameterFileSetsTheDevice) {

@@ -15,17 +15,15 @@
 #include <string>
 #include <vector>
 
+#include "cuda_bench_options.hpp"
 #include "jpcr/cuda/cuda_quadric_fit.hpp"
 #include "jpcr/cuda/device_selection.hpp"
 #include "jpcr/io/synthetic_sequence.hpp"
 
 namespace {
 
-struct Options {
-  int runs = 30;
-  int warmup = 5;
-  bool cpu = true;
-};
+using jpcr::bench::median;
+using jpcr::bench::ms_since;
 
 struct Inputs {
   std::vector<jpcr::VertexMap> vertices;
@@ -48,18 +46,8 @@ Inputs frames(int width, const jpcr::QuadricParams& params) {
   return in;
 }
 
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-double host_ms(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since)
-      .count();
-}
-
-void gpu_row(int width, jpcr::CudaPrecision precision, bool device_normals, const Options& o) {
+void gpu_row(int width, jpcr::CudaPrecision precision, bool device_normals,
+             const jpcr::bench::CudaBenchOptions& o) {
   jpcr::QuadricParams params;
   params.pattern.reference_width = width;  // the reference 129-sample pattern at every size
   const Inputs in = frames(width, params);
@@ -73,7 +61,7 @@ void gpu_row(int width, jpcr::CudaPrecision precision, bool device_normals, cons
     const jpcr::QuadricMap map = device_normals
                                      ? fit.estimate(in.vertices[i % 3])
                                      : fit.estimate(in.vertices[i % 3], in.normals[i % 3]);
-    host.push_back(host_ms(start));
+    host.push_back(ms_since(start));
     const jpcr::CudaQuadricFitTiming t = fit.last_timing();
     kernel.push_back(t.kernel_ms);
     upload.push_back(t.upload_ms);
@@ -99,7 +87,7 @@ void cpu_row(int width) {
   for (int i = 0; i < 5; ++i) {
     const auto start = std::chrono::steady_clock::now();
     fit.estimate(in.vertices[i % 3], in.normals[i % 3]);
-    host.push_back(host_ms(start));
+    host.push_back(ms_since(start));
   }
   std::printf("%4dx%-4d %7d  %-6s  %-7s  %8s  %8s  %8s  %8s  %8s  %8.3f\n", width, width * 3 / 4,
               params.pattern.for_width(width).size(), "cpu", "given", "-", "-", "-", "-", "-",
@@ -109,20 +97,10 @@ void cpu_row(int width) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string a = argv[i];
-    if (a == "--runs" && i + 1 < argc) {
-      o.runs = std::max(20, std::atoi(argv[++i]));
-    } else if (a == "--warmup" && i + 1 < argc) {
-      o.warmup = std::max(1, std::atoi(argv[++i]));
-    } else if (a == "--no-cpu") {
-      o.cpu = false;
-    } else {
-      std::fprintf(stderr, "usage: bench_cuda_quadric [--runs N>=20] [--warmup N] [--no-cpu]\n");
-      return 2;
-    }
-  }
+  jpcr::bench::CudaBenchOptions o;
+  const int status = jpcr::bench::parse_cuda_bench_options(argc, argv, "bench_cuda_quadric",
+                                                           "GPU Quad IT: ms per frame", o);
+  if (status >= 0) return status;
   const jpcr::CudaDeviceInfo& gpu = jpcr::query_cuda_device();
   if (!gpu.available) {
     std::printf("bench_cuda_quadric: no CUDA device (%s); nothing to time\n",

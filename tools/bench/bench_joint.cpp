@@ -5,36 +5,15 @@
 // poses 1 cm / 1° off the truth. Arguments: image width (height 3/4 of it), frames M.
 #include <benchmark/benchmark.h>
 
-#include "bench_windows.hpp"
+#include "joint_bench_window.hpp"
 #include "jpcr/backend/joint_params.hpp"
-#include "jpcr/backend/joint_system.hpp"
-#include "jpcr/quadric/quadric_fit.hpp"
 
 namespace {
 
-struct Window {
-  jpcr::CameraIntrinsics camera;
-  std::vector<jpcr::VertexMap> vertices;
-  jpcr::JointState state;
-};
-
-Window make_window(int width, int frames) {
-  jpcr::bench::BenchWindow b = jpcr::bench::make_bench_window(width, frames);
-  Window w;
-  w.camera = b.camera;
-  w.vertices = std::move(b.vertices);
-  w.state.poses = std::move(b.start);
-  const jpcr::QuadricMap map = jpcr::QuadricFit().estimate(w.vertices[0]);
-  for (std::size_t i = 0; i < map.status.size(); ++i) {
-    w.state.quadrics.push_back(map.quadrics[i].cast<double>());
-    w.state.valid.push_back(map.status[i] == jpcr::QuadricStatus::kValid ? 1 : 0);
-  }
-  return w;
-}
-
 void run(benchmark::State& state, bool estimate_quadrics,
          jpcr::JointSampling sampling = jpcr::JointSampling::kGathered) {
-  const Window w = make_window(static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const jpcr::bench::JointBenchWindow w = jpcr::bench::make_joint_window(
+      static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const jpcr::JointParams params;
   const jpcr::NeighbourhoodPattern pattern = params.quadric.pattern.for_width(w.camera.width);
   const jpcr::JointSystem system(w.vertices, w.camera, pattern, params.terms(estimate_quadrics),

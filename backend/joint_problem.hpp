@@ -1,0 +1,77 @@
+// The Levenberg-Marquardt loop of the joint refiners (method.md §6 "Update"), written once over
+// an abstract joint system: the CPU JointSystem (joint_system.hpp, through CpuJointProblem) and
+// the GPU J-ftf (cuda/cuda_joint_ftf.hpp) both provide linearise / propose / accept, so J-ftf,
+// J-full and Q-full on the CPU and J-ftf on the GPU step, damp and stop identically.
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "jpcr/backend/joint_system.hpp"
+#include "jpcr/backend/refiner.hpp"
+
+namespace jpcr {
+
+/// A joint system that holds its current state T_2 … T_M, γ_p (wherever it keeps them).
+class JointProblem {
+ public:
+  virtual ~JointProblem() = default;
+
+  /// The reduced system (S, s, diag A, cost, counts) at the current state, with the Levenberg
+  /// damping λ on diag C_p.
+  virtual ReducedSystem linearize(double lambda) = 0;
+
+  /// Back-substitutes the quadric steps for `pose_steps` (solved from `system`, which is the
+  /// most recent linearize(λ)) into a candidate state and returns Σ w r² there, re-associated
+  /// at the candidate poses.
+  virtual double propose(const ReducedSystem& system, double lambda,
+                         const std::vector<Vector6d>& pose_steps) = 0;
+
+  /// The candidate of the last propose() becomes the current state.
+  virtual void accept() = 0;
+
+  /// The current state on the host.
+  virtual const JointState& state() = 0;
+};
+
+/// JointProblem over the CPU driver JointSystem (which stays stateless).
+class CpuJointProblem final : public JointProblem {
+ public:
+  CpuJointProblem(const JointSystem& system, JointState initial)
+      : system_(system), state_(std::move(initial)) {}
+  ReducedSystem linearize(double lambda) override { return system_.linearize(state_, lambda); }
+  double propose(const ReducedSystem& system, double lambda,
+                 const std::vector<Vector6d>& pose_steps) override {
+    candidate_ = system_.step(state_, system, lambda, pose_steps);
+    return candidate_.cost;
+  }
+  void accept() override { state_ = std::move(candidate_.candidate); }
+  const JointState& state() override { return state_; }
+
+ private:
+  const JointSystem& system_;
+  JointState state_;
+  JointStep candidate_;
+};
+
+/// Throws std::invalid_argument unless 2 ≤ M ≤ kMaxWindowFrames frames of the camera's size,
+/// M poses with T_1 = I, and a quadric map of frame 1's size.
+void check_joint_inputs(const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
+                        const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& quadrics);
+
+/// The initial state: the poses (T_1 set to I exactly) and the valid quadrics of `map`.
+JointState initial_joint_state(const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& map);
+
+/// Linearise, solve the reduced system, back-substitute, accept the step only when Σ w r² does
+/// not increase (else raise λ on diag A and diag C_p and retry), until the pose steps are below
+/// the tolerances; then the report, the covariance from the undamped system and the refined map
+/// (initial_quadrics with the refined quadrics of the valid pixels; a quadric left with fewer
+/// than min_samples of its reference-frame samples in its gate is invalid). estimate_quadrics =
+/// false is Q-full.
+RefinementResult run_joint_refinement(JointProblem& problem, const JointParams& params,
+                                      bool estimate_quadrics, const std::string& method,
+                                      const QuadricMap& initial_quadrics,
+                                      const VertexMap& reference);
+
+}  // namespace jpcr

@@ -1,0 +1,24 @@
+#include "jpcr/cuda/refiner_factory.hpp"
+
+#if defined(JPCR_HAVE_CUDA)
+#include "jpcr/cuda/cuda_joint_ftf.hpp"
+#endif
+
+namespace jpcr {
+
+std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams& params,
+                                      ComputeDevice device, std::ostream& log) {
+  std::unique_ptr<Refiner> cpu = make_refiner(name, params);  // throws for an unknown name
+  if (name != "j-ftf") {
+    log << "jpcr: " << name << " has no GPU version; device " << to_string(device) << " -> cpu\n";
+    return cpu;
+  }
+  // Without CUDA, resolve_device never returns kCuda (it throws for a cuda request).
+  [[maybe_unused]] const ComputeDevice chosen = resolve_device(device, log);
+#if defined(JPCR_HAVE_CUDA)
+  if (chosen == ComputeDevice::kCuda) return std::make_unique<CudaJointFrameToFrame>(params);
+#endif
+  return cpu;
+}
+
+}  // namespace jpcr

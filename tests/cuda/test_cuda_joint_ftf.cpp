@@ -1,0 +1,273 @@
+// GPU J-ftf against the CPU reference (issue 7, label gpu; skipped without a GPU), on fresh random
+// pairs (tests/cuda/random_frames.hpp; the seed is printed, JPCR_TEST_SEED replays it):
+//   - one iteration: the reduced system S, s, diag A and the cost equal the CPU JointSystem's to
+//     1e-9 relative (double sums of the same per-pixel numbers; only the summation order and FMA
+//     contraction differ, about 1e-15 per term), the active set and the term count exactly, the
+//     pose step to 1e-6 relative, the candidate's cost to 1e-9 relative and its curvature map to
+//     1e-4 1/m RMS; every device output is pre-filled with NaN and none may remain;
+//   - a whole refinement ends as the CPU's does: same verdict and step count, the poses to
+//     1e-6 m / 1e-6 rad (a tenth of the convergence tolerances), curvature to 1e-4 1/m RMS;
+//   - device buffers are reused across pairs, and the factory hands out the GPU refiner.
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+#include "cuda/random_frames.hpp"
+#include "jpcr/backend/joint_frame_to_frame.hpp"
+#include "jpcr/cuda/cuda_joint_ftf.hpp"
+#include "jpcr/cuda/refiner_factory.hpp"
+#include "jpcr/quadric/quadric_fit.hpp"
+#include "jpcr/quadric/se3.hpp"
+
+namespace jpcr {
+namespace {
+
+#define SKIP_WITHOUT_GPU()      \
+  if (!cuda_device_available()) \
+  GTEST_SKIP() << "no CUDA device (" << query_cuda_device().description << ")"
+
+double relative(const Eigen::MatrixXd& a, const Eigen::MatrixXd& reference) {
+  return (a - reference).norm() / reference.norm();
+}
+
+double relative(double a, double reference) {
+  return std::abs(a - reference) / std::abs(reference);
+}
+
+// RMS of the principal-curvature difference over the pixels valid in `valid` whose quadrics
+// are finite in both.
+double curvature_rms(const std::vector<Quadricd>& a, const std::vector<Quadricd>& b,
+                     const std::vector<unsigned char>& valid) {
+  double sum = 0.0;
+  int n = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!valid[i]) continue;
+    const Eigen::Vector2d ka = principal_curvatures(a[i].a, a[i].b, a[i].c);
+    const Eigen::Vector2d kb = principal_curvatures(b[i].a, b[i].b, b[i].c);
+    if (!ka.allFinite() || !kb.allFinite()) continue;
+    sum += (ka - kb).squaredNorm();
+    n += 2;
+  }
+  return n > 0 ? std::sqrt(sum / n) : NAN;
+}
+
+bool finite(const Quadricd& q) {
+  return q.R.allFinite() && q.center.allFinite() && std::isfinite(q.t_z) && std::isfinite(q.a) &&
+         std::isfinite(q.b) && std::isfinite(q.c);
+}
+
+bool same(const Quadricd& a, const Quadricd& b) {
+  return a.R == b.R && a.center == b.center && a.t_z == b.t_z && a.a == b.a && a.b == b.b &&
+         a.c == b.c;
+}
+
+std::uint64_t announce_seed() {
+  const std::uint64_t seed = test::test_seed();
+  std::printf("seed %llu (JPCR_TEST_SEED replays it); %s\n", static_cast<unsigned long long>(seed),
+              query_cuda_device().description.c_str());
+  return seed;
+}
+
+// The parity tests' inputs, checked on the CPU (runs without a GPU too): a random pair overlaps
+// (measured 34-72 % of the pixels active on 8 seeds; the bound is 12.5 %) and its start pose is
+// 1 cm / 1° off the truth.
+TEST(CudaJointFrameToFrame, RandomPairsOverlapAndStartOneCentimetreOneDegreeOff) {
+  const std::uint64_t seed = test::test_seed();
+  const test::RandomPair pair = test::random_pair(seed, 160, 120);
+  const Eigen::Isometry3d E = pair.start * pair.truth.inverse();       // exp(δ^) of 1 cm, 1°
+  EXPECT_NEAR(E.translation().norm(), 0.01, 1e-4) << "seed " << seed;  // |V t| = |t| (1 + O(θ²))
+  EXPECT_NEAR(rotation_angle(E.linear()), M_PI / 180, 1e-9) << "seed " << seed;
+  const JointParams params;
+  const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
+  const JointSystem cpu(pair.vertices, pair.camera,
+                        params.quadric.pattern.for_width(pair.camera.width), params.terms(true));
+  const ReducedSystem lin =
+      cpu.linearize(initial_joint_state({Eigen::Isometry3d::Identity(), pair.start}, initial), 0.0);
+  std::printf("seed %llu: %d of %d pixels active\n", static_cast<unsigned long long>(seed),
+              lin.active, 160 * 120);
+  EXPECT_GT(lin.active, 160 * 120 / 8) << "seed " << seed;
+}
+
+TEST(CudaJointFrameToFrame, OneIterationEqualsTheCpuReference) {
+  SKIP_WITHOUT_GPU();
+  const std::uint64_t seed = announce_seed();
+  const JointParams params;
+  const double lambda = params.initial_damping;
+  for (std::uint64_t k = 0; k < 2; ++k) {
+    const test::RandomPair pair = test::random_pair(seed + k, 320, 240);
+    const NeighbourhoodPattern pattern = params.quadric.pattern.for_width(pair.camera.width);
+    const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
+    const JointState state =
+        initial_joint_state({Eigen::Isometry3d::Identity(), pair.start}, initial);
+
+    const JointSystem cpu(pair.vertices, pair.camera, pattern, params.terms(true));
+    const ReducedSystem cpu_lin = cpu.linearize(state, lambda);
+    std::vector<Vector6d> cpu_steps;
+    ASSERT_TRUE(JointSystem::solve_poses(cpu_lin, lambda, cpu_steps)) << "seed " << seed + k;
+    const JointStep cpu_step = cpu.step(state, cpu_lin, lambda, cpu_steps);
+
+    CudaJointSystem gpu(params.terms(true));
+    gpu.set_poison_outputs(true);
+    gpu.load(pair.vertices, pair.camera, pattern, state);
+    const ReducedSystem gpu_lin = gpu.linearize(lambda);
+    std::vector<Vector6d> gpu_steps;
+    ASSERT_TRUE(JointSystem::solve_poses(gpu_lin, lambda, gpu_steps)) << "seed " << seed + k;
+    const double gpu_cost = gpu.propose(gpu_lin, lambda, gpu_steps);
+    const JointState candidate = gpu.candidate();
+    const std::vector<PairFactors> factors = gpu.factors();
+
+    const double rel_S = relative(gpu_lin.S, cpu_lin.S), rel_s = relative(gpu_lin.s, cpu_lin.s);
+    const double rel_step = relative(gpu_steps[0], cpu_steps[0]);
+    const double rms = curvature_rms(candidate.quadrics, cpu_step.candidate.quadrics, state.valid);
+    std::printf(
+        "seed %llu: %d active quadrics (CPU %d), S %.2g, s %.2g, diag A %.2g, cost %.2g relative; "
+        "pose step %.2g relative; candidate cost %.2g relative, kappa RMS %.2g 1/m; "
+        "linearize %.3f ms, propose %.3f ms\n",
+        static_cast<unsigned long long>(seed + k), gpu_lin.active, cpu_lin.active, rel_S, rel_s,
+        relative(gpu_lin.A_diagonal, cpu_lin.A_diagonal), relative(gpu_lin.cost, cpu_lin.cost),
+        rel_step, relative(gpu_cost, cpu_step.cost), rms, gpu.last_timing().linearize_ms,
+        gpu.last_timing().propose_ms);
+    EXPECT_GT(cpu_lin.active, 320 * 240 / 8) << "seed " << seed + k;
+    EXPECT_EQ(gpu_lin.active, cpu_lin.active) << "seed " << seed + k;
+    EXPECT_EQ(gpu_lin.seen, cpu_lin.seen) << "seed " << seed + k;
+    EXPECT_EQ(gpu_lin.terms, cpu_lin.terms) << "seed " << seed + k;
+    EXPECT_LE(rel_S, 1e-9) << "seed " << seed + k;
+    EXPECT_LE(rel_s, 1e-9) << "seed " << seed + k;
+    EXPECT_LE(relative(gpu_lin.A_diagonal, cpu_lin.A_diagonal), 1e-9) << "seed " << seed + k;
+    EXPECT_LE(relative(gpu_lin.cost, cpu_lin.cost), 1e-9) << "seed " << seed + k;
+    EXPECT_LE(rel_step, 1e-6) << "seed " << seed + k;
+    EXPECT_LE(relative(gpu_cost, cpu_step.cost), 1e-9) << "seed " << seed + k;
+    EXPECT_LE(rms, 1e-4) << "seed " << seed + k;
+
+    // Every output written: the factors of exactly the CPU's active quadrics, all finite; every
+    // candidate quadric finite, and the inactive ones unchanged.
+    // (The CPU's factors come in the order its threads finished; the GPU's in pixel order.)
+    std::vector<unsigned char> active(state.quadrics.size(), 0), cpu_active(active);
+    for (const PairFactors& f : cpu_lin.factors)
+      cpu_active[f.pixel] = 1;
+    for (const PairFactors& f : factors) {
+      ASSERT_TRUE(f.k.allFinite() && f.K.allFinite()) << "pixel " << f.pixel;
+      active[f.pixel] = 1;
+    }
+    ASSERT_EQ(factors.size(), cpu_lin.factors.size()) << "seed " << seed + k;
+    ASSERT_TRUE(active == cpu_active) << "seed " << seed + k;
+    for (std::size_t i = 0; i < candidate.quadrics.size(); ++i) {
+      if (!finite(state.quadrics[i])) continue;  // only where the CPU state is a number
+      ASSERT_TRUE(finite(candidate.quadrics[i])) << "pixel " << i << ", seed " << seed + k;
+      if (!active[i]) {
+        ASSERT_TRUE(same(candidate.quadrics[i], state.quadrics[i])) << "pixel " << i;
+      }
+    }
+  }
+}
+
+TEST(CudaJointFrameToFrame, RefinesAPairToConvergenceAsTheCpu) {
+  SKIP_WITHOUT_GPU();
+  const std::uint64_t seed = announce_seed();
+  JointParams params;  // n₀ and the gate grow with the range, as for range noise in Quad IT
+  params.quadric.fit.fair_n0_per_range = params.quadric.fit.gate_per_range = 0.03f;
+  const test::RandomPair pair = test::random_pair(seed, 320, 240);
+  const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
+  const std::vector<Eigen::Isometry3d> start = {Eigen::Isometry3d::Identity(), pair.start};
+  const RefinementResult cpu =
+      JointFrameToFrame(params).refine(pair.vertices, pair.camera, start, initial);
+  const CudaJointFrameToFrame gpu_refiner(params);
+  const RefinementResult gpu = gpu_refiner.refine(pair.vertices, pair.camera, start, initial);
+  const Eigen::Isometry3d E = cpu.poses[1].inverse() * gpu.poses[1];
+  const double dt = E.translation().norm(), dr = rotation_angle(E.linear());
+  double sum = 0.0;
+  int n = 0;
+  for (std::size_t i = 0; i < gpu.quadrics.status.size(); ++i) {
+    if (gpu.quadrics.status[i] != QuadricStatus::kValid ||
+        cpu.quadrics.status[i] != QuadricStatus::kValid)
+      continue;
+    sum += (gpu.quadrics.curvature[i] - cpu.quadrics.curvature[i]).cast<double>().squaredNorm();
+    n += 2;
+  }
+  const double rms = n > 0 ? std::sqrt(sum / n) : NAN;
+  std::printf(
+      "CPU %s after %d steps (%d rejected), GPU %s after %d steps (%d rejected); poses differ "
+      "by %.2g m, %.2g rad; kappa RMS %.2g 1/m; final cost %.6g vs %.6g\n",
+      to_string(cpu.report.verdict), cpu.report.iterations, cpu.report.rejected_steps,
+      to_string(gpu.report.verdict), gpu.report.iterations, gpu.report.rejected_steps, dt, dr, rms,
+      cpu.report.cost.back(), gpu.report.cost.back());
+  EXPECT_NE(cpu.report.verdict, RefinementVerdict::kTooFewQuadrics) << "seed " << seed;
+  EXPECT_GT(cpu.report.iterations, 1) << "seed " << seed;
+  EXPECT_EQ(gpu.report.verdict, cpu.report.verdict) << "seed " << seed;
+  EXPECT_EQ(gpu.report.iterations, cpu.report.iterations) << "seed " << seed;
+  EXPECT_EQ(gpu.report.active_quadrics, cpu.report.active_quadrics) << "seed " << seed;
+  EXPECT_LE(dt, 1e-6) << "seed " << seed;
+  EXPECT_LE(dr, 1e-6) << "seed " << seed;
+  EXPECT_LE(rms, 1e-4) << "seed " << seed;
+  EXPECT_LE(relative(gpu.report.cost.back(), cpu.report.cost.back()), 1e-6) << "seed " << seed;
+  if (cpu.covariance[1].norm() > 0.0) {  // zero when S is degenerate (finish_report)
+    EXPECT_LE(relative(gpu.covariance[1], cpu.covariance[1]), 1e-6) << "seed " << seed;
+  } else {
+    EXPECT_EQ(gpu.covariance[1].norm(), 0.0) << "seed " << seed;
+  }
+}
+
+TEST(CudaJointFrameToFrame, ReusesDeviceBuffersAcrossPairs) {
+  SKIP_WITHOUT_GPU();
+  const std::uint64_t seed = announce_seed();
+  JointParams params;
+  params.max_iterations = 2;
+  const CudaJointFrameToFrame refiner(params);
+  auto refine = [&](const test::RandomPair& pair) {
+    const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
+    refiner.refine(pair.vertices, pair.camera, {Eigen::Isometry3d::Identity(), pair.start},
+                   initial);
+  };
+  refine(test::random_pair(seed, 320, 240));
+  const std::size_t after_first = refiner.device_allocations();
+  EXPECT_GT(after_first, 0u);
+  refine(test::random_pair(seed + 1, 320, 240));
+  refine(test::random_pair(seed + 2, 160, 120));
+  EXPECT_EQ(refiner.device_allocations(), after_first);
+}
+
+TEST(CudaJointFrameToFrame, RejectsBadInputLikeTheCpu) {
+  SKIP_WITHOUT_GPU();
+  const test::RandomPair pair = test::random_pair(test::test_seed(), 160, 120);
+  const QuadricMap initial = QuadricFit().estimate(pair.vertices[0]);
+  const CudaJointFrameToFrame refiner;
+  const std::vector<VertexMap> three = {pair.vertices[0], pair.vertices[1], pair.vertices[1]};
+  EXPECT_THROW(refiner.refine(three, pair.camera,
+                              {Eigen::Isometry3d::Identity(), pair.start, pair.start}, initial),
+               std::invalid_argument);
+  EXPECT_THROW(refiner.refine(pair.vertices, pair.camera, {pair.start, pair.start}, initial),
+               std::invalid_argument);
+  EXPECT_THROW(refiner.refine(pair.vertices, pair.camera,
+                              {Eigen::Isometry3d::Identity(), pair.start}, QuadricMap(80, 60)),
+               std::invalid_argument);
+}
+
+TEST(CudaJointFrameToFrame, AnEmptyPairHasTooFewQuadricsAsOnTheCpu) {
+  SKIP_WITHOUT_GPU();
+  const CameraIntrinsics camera = synthetic_camera(160, 120);
+  const VertexMap empty = compute_vertex_map(DepthImage(camera.width, camera.height, 0.0f), camera);
+  const QuadricMap initial = QuadricFit().estimate(empty);
+  const std::vector<Eigen::Isometry3d> start = {Eigen::Isometry3d::Identity(),
+                                                Eigen::Isometry3d::Identity()};
+  const RefinementResult gpu =
+      CudaJointFrameToFrame().refine({empty, empty}, camera, start, initial);
+  const RefinementResult cpu = JointFrameToFrame().refine({empty, empty}, camera, start, initial);
+  EXPECT_EQ(gpu.report.verdict, RefinementVerdict::kTooFewQuadrics);
+  EXPECT_EQ(cpu.report.verdict, RefinementVerdict::kTooFewQuadrics);
+  EXPECT_EQ(gpu.report.active_quadrics, 0);
+  EXPECT_TRUE(gpu.poses[1].isApprox(start[1]));
+}
+
+TEST(CudaJointFrameToFrame, TheFactoryGivesTheGpuRefinerForCuda) {
+  SKIP_WITHOUT_GPU();
+  std::ostringstream log;
+  const auto refiner = make_refiner("j-ftf", JointParams{}, ComputeDevice::kCuda, log);
+  EXPECT_NE(dynamic_cast<const CudaJointFrameToFrame*>(refiner.get()), nullptr);
+  EXPECT_EQ(refiner->name(), "j-ftf");
+  EXPECT_NE(log.str().find("-> cuda ("), std::string::npos) << log.str();
+}
+
+}  // namespace
+}  // namespace jpcr
