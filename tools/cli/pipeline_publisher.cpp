@@ -12,11 +12,12 @@ void PipelinePublisher::keyframe_final(const KeyframePipeline& pipeline, int key
 }
 
 void PipelinePublisher::frame_added(const KeyframePipeline& pipeline, const PipelineFrame& frame) {
-  const Trajectory trajectory = pipeline.trajectory();
-  publisher_.publish_odometry(trajectory.back(), frame.icp_covariance);
+  // The frame's own pose only: copying the whole trajectory per frame grew with the run.
+  publisher_.publish_odometry(pipeline.refined_pose(static_cast<std::size_t>(frame.index)),
+                              frame.icp_covariance);
   if (pipeline.keyframes().size() != keyframes_seen_) {
     keyframes_seen_ = pipeline.keyframes().size();
-    publisher_.publish_path(trajectory);
+    publisher_.publish_path(pipeline.trajectory());
   }
 }
 
