@@ -46,7 +46,8 @@ int run_main(int argc, char** argv) {
       "(--method pipeline). The paper's methods also run alone, on every consecutive frame:\n"
       "icp-ftf, j-ftf, j-full and q-full. Writes OUT/trajectory.txt (TUM, refined),\n"
       "OUT/front_end.txt (ICP-ftf), OUT/keyframes.txt, OUT/curvature/<stamp>.npy and\n"
-      "OUT/curvature_png/<stamp>.png per keyframe (J-ftf/J-full quadrics), OUT/report.json.");
+      "OUT/curvature_png/<stamp>.png per keyframe (J-ftf/J-full quadrics), OUT/report.json,\n"
+      "OUT/verdicts.txt (per frame: front-end and back-end verdicts, trusted yes/no).");
   args.required("dataset", "TUM directory (jpcr_synth writes one) or MRPT .rawlog")
       .option("config", "camera YAML (default: the dataset's camera.yaml or rawlog intrinsics)")
       .option("method", "pipeline | icp-ftf | j-ftf | j-full | q-full (default: params)")
@@ -125,6 +126,8 @@ int run_main(int argc, char** argv) {
 
     const Trajectory refined = runner.trajectory();
     write_trajectory((out / "trajectory.txt").string(), refined);
+    write_file_atomically((out / "verdicts.txt").string(),
+                          [&](std::ostream& o) { run::write_verdicts(o, runner); });
     write_trajectory((out / "front_end.txt").string(), runner.front_end_trajectory());
     write_trajectory((out / "keyframes.txt").string(), keyframe_trajectory(runner));
     Trajectory gt;
