@@ -111,14 +111,15 @@ int long_run_main(int argc, char** argv) {
     const double ms_start = mean(ms, warmup, warmup + block);
     const double ms_end = mean(ms, frames - block, frames);
     const double time_growth = 100.0 * (ms_end - ms_start) / ms_start;
-    std::printf("%s, %d frames %dx%d, noise %s, method %s, window %d: %zu keyframes, %zu maps, "
-                "%zu frames not trusted\n",
-                o.scene.c_str(), frames, o.width, o.height, o.noise.c_str(),
-                to_string(params.method), params.window, pipeline.keyframes().size(), maps,
-                untrusted);
-    std::printf("RSS after %d warm-up frames: %.2f MiB, at the end: %.2f MiB (peak %.2f): "
-                "growth %+.2f %%\n",
-                warmup, rss_start, rss_end, rss_peak, growth);
+    std::printf(
+        "%s, %d frames %dx%d, noise %s, method %s, window %d: %zu keyframes, %zu maps, "
+        "%zu frames not trusted\n",
+        o.scene.c_str(), frames, o.width, o.height, o.noise.c_str(), to_string(params.method),
+        params.window, pipeline.keyframes().size(), maps, untrusted);
+    std::printf(
+        "RSS after %d warm-up frames: %.2f MiB, at the end: %.2f MiB (peak %.2f): "
+        "growth %+.2f %%\n",
+        warmup, rss_start, rss_end, rss_peak, growth);
     std::printf("ms per frame, frames %d-%d: %.2f, frames %d-%d: %.2f: growth %+.1f %%\n", warmup,
                 warmup + block - 1, ms_start, frames - block, frames - 1, ms_end, time_growth);
     const bool rss_ok = growth < args.get_double("max-rss-growth");

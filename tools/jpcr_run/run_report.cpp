@@ -104,7 +104,8 @@ void write_verdicts(std::ostream& out, const KeyframePipeline& p) {
          "# timestamp front_end pair window trusted\n"
          "# front_end: ICP-ftf, ok | degenerate | diverged | too_few_points\n"
          "# pair: J-ftf of the frame's keyframe, window: J-full/Q-full that refined it last,\n"
-         "#   converged | max_iterations | diverged | too_few_quadrics | degenerate | - (did not run)\n"
+         "#   converged | max_iterations | diverged | too_few_quadrics | degenerate | - (did not "
+         "run)\n"
          "# trusted: yes when front_end is ok and every refinement converged or hit "
          "max_iterations\n";
   const auto refinement = [](const std::optional<RefinementVerdict>& v) {
@@ -112,9 +113,9 @@ void write_verdicts(std::ostream& out, const KeyframePipeline& p) {
   };
   for (std::size_t i = 0; i < p.frames().size(); ++i) {
     const FrameVerdicts v = p.verdicts(i);
-    out << format_double(p.frames()[i].front_end.timestamp) << ' ' << to_string(v.front_end)
-        << ' ' << refinement(v.pair) << ' ' << refinement(v.window) << ' '
-        << (v.trusted() ? "yes" : "no") << '\n';
+    out << format_double(p.frames()[i].front_end.timestamp) << ' ' << to_string(v.front_end) << ' '
+        << refinement(v.pair) << ' ' << refinement(v.window) << ' ' << (v.trusted() ? "yes" : "no")
+        << '\n';
   }
 }
 
