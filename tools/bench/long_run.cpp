@@ -80,7 +80,12 @@ int long_run_main(int argc, char** argv) {
     o.height = args.get_int("height");
     o.seed = static_cast<std::uint64_t>(args.get_int("seed"));
     const SyntheticSequence seq = make_synthetic_sequence(o);
-    const PipelineParams params = cli::pipeline_params_from(args);
+    PipelineParams params = cli::pipeline_params_from(args);
+    // frontend.icp.min_inliers is set for 640x480 frames; without --params scale it with the
+    // pixel count, as the front end's other levels scale it, or small frames never track.
+    if (!args.has("params"))
+      params.frontend.icp.min_inliers =
+          params.frontend.icp.min_inliers * o.width * o.height / (640 * 480);
 
     std::size_t maps = 0;
     KeyframePipeline pipeline(params, [&](int, const Frame&, const QuadricMap&) { ++maps; });
