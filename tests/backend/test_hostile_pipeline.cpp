@@ -1,7 +1,10 @@
-// Degenerate and hostile input through the whole pipeline (issue 11), the cases where the back
-// end refines for long (minutes under AddressSanitizer, so labelled slow): a featureless corridor
-// and a sudden 50 cm jump, with the unspoiled walk as the control. As test_hostile_scenes.cpp:
-// not ok on the affected frames, trusted before, the run goes on with finite poses.
+// Degenerate and hostile input through the whole pipeline (issue 11), the cases in which the back
+// end refines (minutes under AddressSanitizer, so labelled slow): a featureless corridor, a frame
+// with < 1 % valid depth, a frame full of NaN/Inf and a sudden 50 cm jump, with the unspoiled
+// walk as the control. Each must give a verdict that is not ok on the affected frames
+// (FrameVerdicts: the front end's IcpVerdict and the back end's RefinementVerdicts), the frames
+// before it stay trusted (so the flag is the event's, not the scene's), the pipeline keeps going
+// to the last frame with finite poses, and tracking recovers.
 #include "hostile_runs.hpp"
 
 namespace jpcr::hostile {
@@ -41,6 +44,27 @@ TEST(HostileScenes, FiftyCentimetreJumpIsNotOk) {
   expect_trusted_before(r, jump);
   expect_flagged(r, jump);
   expect_recovered(r);
+}
+
+// Frame 4 of an 8-frame walk through room_spheres is spoiled: it and only the frames after it may
+// be flagged, it must be (too few points to align), and the last frame is tracked again.
+void expect_spoiled_frame_flagged(const std::function<void(Frame&)>& spoil) {
+  const std::size_t bad = 4;
+  const PipelineRun r = run(walk("room_spheres", 8), [&](std::size_t i, Frame& f) {
+    if (i == bad) spoil(f);
+  });
+  expect_trusted_before(r, bad);
+  expect_flagged(r, bad);
+  EXPECT_EQ(r.verdicts[bad].front_end, IcpVerdict::too_few_points);
+  expect_recovered(r);
+}
+
+TEST(HostileScenes, FrameWithUnderOnePercentValidDepthIsNotOk) {
+  expect_spoiled_frame_flagged(keep_under_one_percent);
+}
+
+TEST(HostileScenes, DepthFullOfNanAndInfIsNotOk) {
+  expect_spoiled_frame_flagged(fill_non_finite);
 }
 
 }  // namespace
