@@ -21,6 +21,8 @@ void JointParams::validate() const {
   if (!(max_damping > initial_damping))
     throw InputError("max_damping: must exceed initial_damping");
   if (min_active_quadrics < 1) throw InputError("min_active_quadrics: must be at least 1");
+  if (!(degeneracy_threshold >= 0.0 && degeneracy_threshold < 1.0))
+    throw InputError("degeneracy_threshold: must be in [0, 1)");
 }
 
 }  // namespace jpcr

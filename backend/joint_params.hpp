@@ -30,6 +30,9 @@ struct JointParams {
                                   // between two values with every other step rejected)
   double max_damping = 1e6;       // λ above it: the cost cannot be lowered → diverged
   int min_active_quadrics = 50;   // fewer quadrics seen in another frame: too_few_quadrics
+  // Unit-free λmin / λmax of S below it: degenerate. Measured at 160x120: 0.007-0.02 on the
+  // synthetic scenes (J-ftf, J-full windows of 4), 5e-10 on the corridor (two parallel planes).
+  double degeneracy_threshold = 1e-4;
 
   /// The per-pixel part, as the kernels receive it.
   JointTermParams terms(bool estimate_quadrics) const {

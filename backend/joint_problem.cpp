@@ -26,7 +26,9 @@ bool below_tolerance(const std::vector<Vector6d>& steps, const JointParams& p) {
 }
 
 // The covariance σ² S⁻¹ of the poses at the final, undamped linearisation, and the degeneracy
-// measure λ_min / λ_max of S.
+// measure λ_min / λ_max of S made unit-free: each pose's ω columns and rows are scaled by
+// √(tr S_vv / tr S_ωω), the RMS lever arm, as the front end does (IcpResult::degeneracy), so
+// metres and radians weigh alike.
 void finish_report(const ReducedSystem& lin, bool estimate_quadrics, RefinementResult& out) {
   const int n = static_cast<int>(lin.s.size());
   RefinementReport& r = out.report;
@@ -37,7 +39,14 @@ void finish_report(const ReducedSystem& lin, bool estimate_quadrics, RefinementR
   const long unknowns = n + (estimate_quadrics ? 6L * lin.active : 0L);
   if (lin.terms <= unknowns || lin.active == 0) return;
   r.residual_variance = lin.cost / static_cast<double>(lin.terms - unknowns);
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(lin.S, Eigen::EigenvaluesOnly);
+  Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
+  for (int j = 0; j < n / 6; ++j) {
+    const double tv = lin.S.block<3, 3>(6 * j, 6 * j).trace();
+    const double tw = lin.S.block<3, 3>(6 * j + 3, 6 * j + 3).trace();
+    if (tv > 0.0 && tw > 0.0) d.segment<3>(6 * j + 3).setConstant(std::sqrt(tv / tw));
+  }
+  const Eigen::MatrixXd scaled = d.asDiagonal() * lin.S * d.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled, Eigen::EigenvaluesOnly);
   const double top = eig.eigenvalues().maxCoeff();
   r.degeneracy = top > 0.0 ? std::max(0.0, eig.eigenvalues().minCoeff()) / top : 0.0;
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(lin.S);
@@ -155,6 +164,10 @@ RefinementResult run_joint_refinement(JointProblem& problem, const JointParams& 
   }
   report.damping = lambda;
   finish_report(problem.linearize(0.0), estimate_quadrics, out);
+  const bool settled = report.verdict == RefinementVerdict::kConverged ||
+                       report.verdict == RefinementVerdict::kMaxIterations;
+  if (settled && report.degeneracy < params.degeneracy_threshold)
+    report.verdict = RefinementVerdict::kDegenerate;
   const JointState& state = problem.state();
   out.poses = state.poses;
   out.quadrics = refined_map(initial_quadrics, state, reference, params, estimate_quadrics);

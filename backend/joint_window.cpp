@@ -16,6 +16,8 @@ const char* to_string(RefinementVerdict verdict) {
       return "too_few_quadrics";
     case RefinementVerdict::kNoOverlap:
       return "no_overlap";
+    case RefinementVerdict::kDegenerate:
+      return "degenerate";
   }
   return "unknown";
 }

@@ -15,11 +15,13 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
+bool usable(RefinementVerdict v) {
+  return v == RefinementVerdict::kConverged || v == RefinementVerdict::kMaxIterations;
+}
+
 // A refinement whose poses can be used: converged, or still improving at the iteration cap.
 bool usable(const RefinementResult& r) {
-  if (r.report.verdict != RefinementVerdict::kConverged &&
-      r.report.verdict != RefinementVerdict::kMaxIterations)
-    return false;
+  if (!usable(r.report.verdict)) return false;
   for (const Eigen::Isometry3d& T : r.poses)
     if (!T.matrix().allFinite()) return false;
   return true;
@@ -195,16 +197,42 @@ void PipelineBackEnd::emit_curvature(std::size_t slot, const QuadricMap& quadric
         fit.estimate(compute_vertex_map(frame.depth, frame.camera)));
 }
 
+StampedPose PipelineBackEnd::refined_pose(std::size_t index) const {
+  const PipelineFrame& f = frames_.at(index);
+  const PipelineKeyframe& k = keyframes_[f.keyframe];
+  // Re-anchoring: the frame keeps its front-end offset from its keyframe.
+  StampedPose p = f.front_end;
+  p.pose = k.refined.pose * (k.front_end.pose.inverse() * f.front_end.pose);
+  return p;
+}
+
 Trajectory PipelineBackEnd::trajectory() const {
   Trajectory out;
-  for (const PipelineFrame& f : frames_) {
-    const PipelineKeyframe& k = keyframes_[f.keyframe];
-    // Re-anchoring: the frame keeps its front-end offset from its keyframe.
-    StampedPose p = f.front_end;
-    p.pose = k.refined.pose * (k.front_end.pose.inverse() * f.front_end.pose);
-    out.push_back(p);
-  }
+  out.reserve(frames_.size());
+  for (std::size_t i = 0; i < frames_.size(); ++i)
+    out.push_back(refined_pose(i));
   return out;
+}
+
+bool FrameVerdicts::trusted() const {
+  return front_end == IcpVerdict::ok && (!pair || usable(*pair)) && (!window || usable(*window));
+}
+
+FrameVerdicts PipelineBackEnd::verdicts(std::size_t index) const {
+  const PipelineFrame& f = frames_.at(index);
+  FrameVerdicts v;
+  v.front_end = f.icp_verdict;
+  const PipelineKeyframe& k = keyframes_[f.keyframe];
+  if (k.pair) v.pair = k.pair->verdict;
+  // The gauge keyframe is never refined; any other was last refined by the window it ends, or
+  // else by the window of the first later keyframe that ends one (windows share end frames).
+  if (f.keyframe == 0 || !window_refiner_) return v;
+  for (std::size_t j = f.keyframe; j < keyframes_.size(); ++j)
+    if (keyframes_[j].window) {
+      v.window = keyframes_[j].window->verdict;
+      break;
+    }
+  return v;
 }
 
 Trajectory PipelineBackEnd::front_end_trajectory() const {

@@ -67,6 +67,22 @@ struct PipelineKeyframe {
   double refine_ms = 0.0;
 };
 
+/// What the front end and the back end said about one frame (jpcr_run's verdicts.txt): whether
+/// its pose can be trusted (architecture.md: every result says so).
+struct FrameVerdicts {
+  IcpVerdict front_end = IcpVerdict::ok;  // the frame's alignment (ok for the first frame)
+  /// J-ftf of the frame's keyframe against the previous keyframe; absent for the first keyframe
+  /// and for methods without J-ftf.
+  std::optional<RefinementVerdict> pair;
+  /// J-full / Q-full of the window that refined the frame's keyframe last; absent for the first
+  /// keyframe (the gauge), before its window ran and for methods without windows.
+  std::optional<RefinementVerdict> window;
+
+  /// The front end is ok and every refinement that ran converged or hit max_iterations (the
+  /// results the pipeline uses).
+  bool trusted() const;
+};
+
 /// Receives each keyframe's refined quadrics (curvature map) once no later step changes them:
 /// the keyframe index (into keyframes()) and its frame, for writers.
 using CurvatureSink =
@@ -89,6 +105,10 @@ class PipelineBackEnd {
   /// The refined camera-to-world pose of every frame.
   Trajectory trajectory() const;
   Trajectory front_end_trajectory() const;
+  /// The refined pose of frame `index` (0-based, < frames().size()), without copying the others.
+  StampedPose refined_pose(std::size_t index) const;
+  /// The verdicts behind frame `index`'s refined pose (0-based, < frames().size()).
+  FrameVerdicts verdicts(std::size_t index) const;
   const std::vector<PipelineFrame>& frames() const { return frames_; }
   const std::vector<PipelineKeyframe>& keyframes() const { return keyframes_; }
   const PipelineParams& params() const { return params_; }

@@ -29,9 +29,11 @@ enum class RefinementVerdict {
   kDiverged,        // the cost could not be lowered (damping ran away) or became non-finite
   kTooFewQuadrics,  // too few quadrics are seen in another frame (no overlap) or a pose is unseen
   kNoOverlap,       // ICP-bundle: a frame overlaps no frame tied to the reference (isolated)
+  kDegenerate,      // the poses' system is near singular (a plane, a corridor): some motion of
+                    // the camera is not observed, so the poses cannot be trusted
 };
 
-/// "converged", "max_iterations", "diverged", "too_few_quadrics", "no_overlap".
+/// "converged", "max_iterations", "diverged", "too_few_quadrics", "no_overlap", "degenerate".
 const char* to_string(RefinementVerdict verdict);
 
 /// Whether a result can be trusted (architecture.md: every result says so).
@@ -49,7 +51,11 @@ struct RefinementReport {
   std::vector<int> isolated;       // icp-bundle: frames (window index) left as given
   double residual_variance = 0.0;  // m²: final cost / (terms − unknowns)
   double damping = 0.0;            // λ at the end
-  double degeneracy = 0.0;         // smallest / largest eigenvalue of the reduced system S
+  /// λmin / λmax of the reduced pose system S made unit-free (each pose's ω block scaled by
+  /// √(tr S_vv / tr S_ωω), as the front end's IcpResult::degeneracy): 1 is perfectly
+  /// conditioned, 0 unobservable; below JointParams::degeneracy_threshold the verdict is
+  /// kDegenerate.
+  double degeneracy = 0.0;
 
   bool converged() const { return verdict == RefinementVerdict::kConverged; }
 };

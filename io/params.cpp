@@ -177,6 +177,7 @@ void read_joint(YamlSection yaml, JointParams& p) {
   yaml.read("damping_decrease", p.damping_decrease);
   yaml.read("max_damping", p.max_damping);
   yaml.read("min_active_quadrics", p.min_active_quadrics);
+  yaml.read("degeneracy_threshold", p.degeneracy_threshold);
   yaml.finish();
   validate_in(yaml, p);
 }

@@ -14,13 +14,9 @@ build=$1 src=$2
 # shellcheck source=node_helpers.sh
 source "$src/tests/tools/node_helpers.sh"
 # Deep enough depth and result histories that no frame or path is dropped while the nodes work.
-# The front end's inlier floor scaled to 160x120 (1000 pairs is for a 640x480 pyramid, 16 times
-# the pixels), and a keyframe every 2 cm so that 8 frames of the walk make keyframes and frames
-# between them.
+# A keyframe every 2 cm so that 8 frames of the walk make keyframes and frames between them.
 cat > "$tmp/params.yaml" <<'YAML'
 frontend:
-  icp:
-    min_inliers: 250
   tracker:
     keyframe_translation: 0.02
 dds:

@@ -12,7 +12,9 @@ void PipelinePublisher::keyframe_final(const PipelineBackEnd& pipeline, int keyf
 }
 
 void PipelinePublisher::frame_added(const PipelineBackEnd& pipeline, const PipelineFrame& frame) {
-  publisher_.publish_odometry(pipeline.trajectory().back(), frame.icp_covariance);
+  // The frame's own pose only: copying the whole trajectory per frame grew with the run.
+  publisher_.publish_odometry(pipeline.refined_pose(static_cast<std::size_t>(frame.index)),
+                              frame.icp_covariance);
   path_if_refined(pipeline);
 }
 

@@ -48,7 +48,8 @@ int run_main(int argc, char** argv) {
       "baseline over the same sliding windows as j-full, solved with Ceres; section icp_bundle\n"
       "of --params). Writes OUT/trajectory.txt (TUM, refined),\n"
       "OUT/front_end.txt (ICP-ftf), OUT/keyframes.txt, OUT/curvature/<stamp>.npy and\n"
-      "OUT/curvature_png/<stamp>.png per keyframe (J-ftf/J-full quadrics), OUT/report.json.");
+      "OUT/curvature_png/<stamp>.png per keyframe (J-ftf/J-full quadrics), OUT/report.json,\n"
+      "OUT/verdicts.txt (per frame: front-end and back-end verdicts, trusted yes/no).");
   args.required("dataset", "TUM directory (jpcr_synth writes one) or MRPT .rawlog")
       .option("config", "camera YAML (default: the dataset's camera.yaml or rawlog intrinsics)")
       .option("method",
@@ -128,6 +129,8 @@ int run_main(int argc, char** argv) {
 
     const Trajectory refined = runner.trajectory();
     write_trajectory((out / "trajectory.txt").string(), refined);
+    write_file_atomically((out / "verdicts.txt").string(),
+                          [&](std::ostream& o) { run::write_verdicts(o, runner); });
     write_trajectory((out / "front_end.txt").string(), runner.front_end_trajectory());
     write_trajectory((out / "keyframes.txt").string(), keyframe_trajectory(runner));
     Trajectory gt;

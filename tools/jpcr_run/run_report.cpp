@@ -3,6 +3,7 @@
 #include <cstdio>
 
 #include "jpcr/io/json_writer.hpp"
+#include "jpcr/io/number_format.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr::run {
@@ -98,6 +99,26 @@ void write_report(std::ostream& out, const std::string& dataset, const KeyframeP
   }
   json.end_array().end_object();
   out << '\n';
+}
+
+void write_verdicts(std::ostream& out, const KeyframePipeline& p) {
+  out << "# jpcr_run verdicts, one line per frame of trajectory.txt:\n"
+         "# timestamp front_end pair window trusted\n"
+         "# front_end: ICP-ftf, ok | degenerate | diverged | too_few_points\n"
+         "# pair: J-ftf of the frame's keyframe, window: J-full/Q-full that refined it last,\n"
+         "#   converged | max_iterations | diverged | too_few_quadrics | degenerate | - (did not "
+         "run)\n"
+         "# trusted: yes when front_end is ok and every refinement converged or hit "
+         "max_iterations\n";
+  const auto refinement = [](const std::optional<RefinementVerdict>& v) {
+    return v ? to_string(*v) : "-";
+  };
+  for (std::size_t i = 0; i < p.frames().size(); ++i) {
+    const FrameVerdicts v = p.verdicts(i);
+    out << format_double(p.frames()[i].front_end.timestamp) << ' ' << to_string(v.front_end) << ' '
+        << refinement(v.pair) << ' ' << refinement(v.window) << ' ' << (v.trusted() ? "yes" : "no")
+        << '\n';
+  }
 }
 
 void print_error_table(std::ostream& out, const std::string& method,

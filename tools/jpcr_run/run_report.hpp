@@ -1,5 +1,6 @@
 // What jpcr_run writes besides the curvature maps: the JSON report (per-frame front-end
-// verdicts, per-keyframe refinement reports, timings) and, with ground truth, the error table.
+// verdicts, per-keyframe refinement reports, timings), the per-frame verdicts beside the
+// trajectory and, with ground truth, the error table.
 #pragma once
 
 #include <optional>
@@ -24,6 +25,10 @@ std::optional<TrajectoryErrors> evaluate(const Trajectory& ground_truth,
 void write_report(std::ostream& out, const std::string& dataset, const KeyframePipeline& pipeline,
                   const std::optional<TrajectoryErrors>& front_end,
                   const std::optional<TrajectoryErrors>& refined, double seconds);
+
+/// verdicts.txt: a comment header, then one line per frame, "timestamp front_end pair window
+/// trusted" (FrameVerdicts; "-" where a refinement did not run, trusted "yes" or "no").
+void write_verdicts(std::ostream& out, const KeyframePipeline& pipeline);
 
 /// "method  ATE m  RPE m/frame  RPE deg/frame  rel. transl. m  rel. rot. rad" rows.
 void print_error_table(std::ostream& out, const std::string& method,
