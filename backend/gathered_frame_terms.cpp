@@ -4,12 +4,7 @@
 #include <cstdlib>
 #include <cstring>
 
-// Compiled for AVX2 + FMA and for the baseline, chosen at load time (as quadric_fit.cpp).
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
-#define JPCR_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define JPCR_SIMD_CLONES
-#endif
+#include "jpcr/quadric/simd_clones.hpp"
 
 namespace jpcr {
 

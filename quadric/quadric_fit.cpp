@@ -4,14 +4,7 @@
 #include <stdexcept>
 
 #include "jpcr/quadric/error.hpp"
-
-// The per-pixel fit is compiled twice on x86-64 GCC: for AVX2 + FMA (x86-64-v3) and for the
-// baseline, chosen at load time by the CPU (function multi-versioning); elsewhere once.
-#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
-#define JPCR_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
-#else
-#define JPCR_SIMD_CLONES
-#endif
+#include "jpcr/quadric/simd_clones.hpp"
 
 namespace jpcr {
 

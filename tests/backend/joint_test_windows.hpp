@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "../quadric/quadric_test_scenes.hpp"
+#include "jpcr/backend/joint_pixel_kernel.hpp"
 #include "jpcr/backend/refiner.hpp"
 #include "jpcr/io/synthetic_scene.hpp"
 #include "jpcr/quadric/se3.hpp"
@@ -52,6 +53,14 @@ inline Eigen::Isometry3d perturbed(const Eigen::Isometry3d& T, double metres, do
   Vector6d xi;
   xi << t, w;
   return se3_exp(xi) * T;
+}
+
+/// T as the kernels' RigidMotion.
+inline RigidMotion<double> motion(const Eigen::Isometry3d& T) {
+  RigidMotion<double> m;
+  m.R = T.linear();
+  m.t = T.translation();
+  return m;
 }
 
 struct PoseError {

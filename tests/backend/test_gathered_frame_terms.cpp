@@ -17,15 +17,9 @@ namespace jpcr {
 namespace {
 
 using test::JointTestWindow;
+using test::motion;
 using test::perturbed;
 using test::render_window;
-
-RigidMotion<double> motion(const Eigen::Isometry3d& T) {
-  RigidMotion<double> m;
-  m.R = T.linear();
-  m.t = T.translation();
-  return m;
-}
 
 // The worst difference of the blocks, each relative to its Cauchy-Schwarz scale (a sum Σ w x yᵀ
 // is bounded by √(Σ w |x|²) √(Σ w |y|²)), so that sums which nearly cancel, such as the gradient

@@ -15,15 +15,9 @@ namespace jpcr {
 namespace {
 
 using test::JointTestWindow;
+using test::motion;
 using test::perturbed;
 using test::render_window;
-
-RigidMotion<double> motion(const Eigen::Isometry3d& T) {
-  RigidMotion<double> m;
-  m.R = T.linear();
-  m.t = T.translation();
-  return m;
-}
 
 // The residual of a fixed frame-2 sample Q as a function of the pose and the quadric:
 // r(exp(ξ^) T Q; γ ⊕ Δγ). Central differences with h = 1e-6 have truncation error ~h² |r'''|
