@@ -10,7 +10,7 @@
 #                      [--real-jftf-frames N]
 #
 # Full run (default): 640x480 scenes, the report in report/ of the repository. --quick: small
-# sizes and few frames (CI), the report under --out. Every number in the report comes from this
+# sizes and few frames (minutes), the report under --out. Every number in the report comes from this
 # run; report/ is committed output of a full run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
