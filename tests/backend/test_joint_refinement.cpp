@@ -17,8 +17,8 @@ namespace {
 
 using test::JointTestWindow;
 using test::perturbed;
-using test::print_report;
 using test::pose_error;
+using test::print_report;
 using test::render_window;
 
 // Noise-free 320x240 pair, T₂ 2 cm / 2° off: measured 0.016 mm / 0.0008° after 6 steps (the
