@@ -22,7 +22,7 @@ struct JointParams {
   float occlusion_fraction = 0.02f;     //    projected centre differs from c_z by more than
                                         //    threshold + fraction · c_z (fraction of depth)
   int min_frame_terms = 10;             // terms a frame j needs for its association to count
-  double min_pivot_ratio = 1e-8;        // C_p ill-conditioned below it (joint_pixel_kernel.hpp)
+  double min_pivot_ratio = 1e-2;        // C_p ill-conditioned below it (joint_pixel_kernel.hpp)
   double initial_damping = 1e-4;        // λ: relative Levenberg damping of diag A and diag C_p
   double damping_factor = 10.0;         // λ ← λ·f after a rejected step ...
   double damping_decrease = 3.0;  // ... and λ ← λ/d after an accepted one (d < f: λ settles

@@ -42,8 +42,9 @@ struct JointTermParams {
   float occlusion_threshold = 0.03f;  // m: image j's depth at the projected centre may differ
   float occlusion_fraction = 0.02f;   //    from c_z by threshold + fraction · c_z (occlusion)
   int min_frame_terms = 10;           // a frame j sees the quadric only with this many terms
-  double min_pivot_ratio = 1e-8;      // C_p is ill-conditioned when a Cholesky pivot² falls below
-                                      // this fraction of its diagonal entry (scale-invariant)
+  double min_pivot_ratio = 1e-2;      // C_p is ill-conditioned when a Cholesky pivot² falls below
+                                      // this fraction of its diagonal entry (undamped C_p,
+                                      // scale-invariant)
   bool estimate_quadrics = true;      // false: Q-full (quadrics fixed, no C_p, no frame-1 terms)
 };
 
@@ -270,14 +271,18 @@ JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowV
   }
   if (!any) return;
   if (p.estimate_quadrics) {
-    // LM on the full system: C_p + λ diag C_p; the pivot test is relative to each diagonal entry.
+    // The pivot test runs on the undamped C_p, relative to each diagonal entry: the damping
+    // would lift the pivot of a direction the samples do not observe (e.g. the curvature across
+    // a line of samples along a depth edge) and let it drift over the iterations.
+    sys.L = C;
+    if (!cholesky_factor<Scalar, 6>(sys.L, Scalar(0))) return;
+    for (int i = 0; i < 6; ++i)
+      if (!(sys.L(i, i) * sys.L(i, i) >= Scalar(p.min_pivot_ratio) * C(i, i))) return;
+    // LM on the full system: C_p + λ diag C_p.
     sys.L = C;
     for (int i = 0; i < 6; ++i)
       sys.L(i, i) *= Scalar(1) + lambda;
-    const Eigen::Matrix<Scalar, 6, 1> damped_diagonal = sys.L.diagonal();
     if (!cholesky_factor<Scalar, 6>(sys.L, Scalar(0))) return;
-    for (int i = 0; i < 6; ++i)
-      if (!(sys.L(i, i) * sys.L(i, i) >= Scalar(p.min_pivot_ratio) * damped_diagonal(i))) return;
     sys.k = -sys.g_gamma;
     cholesky_solve<Scalar, 6>(sys.L, sys.k);
     for (int j = 0; j + 1 < w.frames && j < sys.kPoses; ++j) {
