@@ -33,7 +33,7 @@ template <typename Lane>
 class GatheredFrameTerms {
  public:
   static constexpr int kLanes = 32 / sizeof(Lane);  // one AVX register
-  static constexpr int kColumns = 10;               // y (9) and r
+  static constexpr int kColumns = 10;               // y (9) and r (sample_columns.hpp)
 
   explicit GatheredFrameTerms(int pattern_size)
       : capacity_((pattern_size + kLanes - 1) / kLanes * kLanes),

@@ -1,33 +1,43 @@
 #include "jpcr/quadric/quadric_fit.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "jpcr/quadric/error.hpp"
-#include "jpcr/quadric/simd_clones.hpp"
+#include "jpcr/quadric/sample_columns.hpp"
 
 namespace jpcr {
 
 namespace {
 
 // Quad IT at one pixel, the CPU way: the neighbourhood is gathered once into contiguous arrays
-// (centred on p̄), then each Gauss-Newton iteration evaluates linearize_sample on all samples in
-// one SIMD loop that also accumulates the 27 numbers of the normal equations.
-// Same math, parameters and stopping rule as fit_quadric_pixel (quadric_fit_kernel.hpp), which
-// the CUDA kernel runs; tests compare the two.
+// (centred on p̄), then each Gauss-Newton iteration linearises all samples in one SIMD loop that
+// writes √w (J, r) as columns, and the normal equations are their column products
+// (sample_columns.hpp). Same math, parameters and stopping rule as fit_quadric_pixel
+// (quadric_fit_kernel.hpp), which the CUDA kernel runs; tests compare the two.
 class GatheredFit {
  public:
-  explicit GatheredFit(int capacity)
-      : buffer_(static_cast<std::size_t>((capacity + kLanes - 1) / kLanes * kLanes) * kArrays) {}
+  GatheredFit(const NeighbourhoodPattern& pattern, int width)
+      : capacity_((static_cast<int>(pattern.size()) + kLanes - 1) / kLanes * kLanes),
+        buffer_(static_cast<std::size_t>(capacity_) * (kArrays + kQuadricColumns)) {
+    for (const PixelOffset& o : pattern.offsets) {
+      reach_ = std::max({reach_, std::abs(o.du), std::abs(o.dv)});
+      linear_.push_back(static_cast<std::ptrdiff_t>(o.dv) * width + o.du);
+    }
+  }
 
-  JPCR_SIMD_CLONES QuadricStatus run(const VertexMap& vertices, const NeighbourhoodPattern& pattern,
-                                     int u, int v, const Eigen::Vector3f& normal,
-                                     const QuadricFitParams& p, Quadricd& out) {
+  QuadricStatus run(const VertexMap& vertices, const NeighbourhoodPattern& pattern, int u, int v,
+                    const Eigen::Vector3f& normal, const QuadricFitParams& p, Quadricd& out) {
     const Eigen::Vector3f& centre = vertices(u, v);
     if (!is_finite_value(centre.z())) return QuadricStatus::kNoCentre;
     if (!is_finite_value(normal.z())) return QuadricStatus::kNoNormal;
     const int n = gather(vertices, pattern, u, v, centre);
     if (n < p.min_samples) return QuadricStatus::kTooFewSamples;
+    const GatheredSamples<float> samples{array(0), array(1), array(2),
+                                         array(3), array(4), (n + kLanes - 1) / kLanes * kLanes};
     // The model in centred coordinates (p̄ = 0), so sample coordinates stay small in float.
     Quadricd q;
     q.R = local_frame<double>(normal.cast<double>().normalized());
@@ -37,91 +47,27 @@ class GatheredFit {
     double previous_cost = INFINITY;
     for (int it = 0; it <= p.iterations; ++it) {
       const QuadricScalars<float> qs = QuadricScalars<float>::from(q.cast<float>());
-      const float *dx = array(0), *dy = array(1), *dz = array(2), *d2 = array(3), *m = array(4);
-      // The 21 + 6 sums of the normal equations (lower triangle of Σ w JᵀJ, Σ w J r) and the
-      // gated count, accumulated per SIMD lane over blocks of kLanes samples.
-      float acc[29][kLanes] = {};
-      for (int k0 = 0; k0 < n; k0 += kLanes) {
-        for (int lane = 0; lane < kLanes; ++lane) {
-          const int k = k0 + lane;
-          const SampleLinearization<float> l = linearize_sample(qs, dx[k], dy[k], dz[k]);
-          const float inside = m[k] * (std::abs(l.r) <= gate ? 1.0f : 0.0f);  // the gate
-          const float w = inside * fair_weight(l.r, d2[k], n0);
-          const float J[6] = {l.J0, l.J1, l.J2, l.J3, l.J4, l.J5};
-          acc[0][lane] += w * J[0] * J[0];
-          acc[1][lane] += w * J[1] * J[0];
-          acc[2][lane] += w * J[1] * J[1];
-          acc[3][lane] += w * J[2] * J[0];
-          acc[4][lane] += w * J[2] * J[1];
-          acc[5][lane] += w * J[2] * J[2];
-          acc[6][lane] += w * J[3] * J[0];
-          acc[7][lane] += w * J[3] * J[1];
-          acc[8][lane] += w * J[3] * J[2];
-          acc[9][lane] += w * J[3] * J[3];
-          acc[10][lane] += w * J[4] * J[0];
-          acc[11][lane] += w * J[4] * J[1];
-          acc[12][lane] += w * J[4] * J[2];
-          acc[13][lane] += w * J[4] * J[3];
-          acc[14][lane] += w * J[4] * J[4];
-          acc[15][lane] += w * J[5] * J[0];
-          acc[16][lane] += w * J[5] * J[1];
-          acc[17][lane] += w * J[5] * J[2];
-          acc[18][lane] += w * J[5] * J[3];
-          acc[19][lane] += w * J[5] * J[4];
-          acc[20][lane] += w * J[5] * J[5];
-          acc[21][lane] += w * J[0] * l.r;
-          acc[22][lane] += w * J[1] * l.r;
-          acc[23][lane] += w * J[2] * l.r;
-          acc[24][lane] += w * J[3] * l.r;
-          acc[25][lane] += w * J[4] * l.r;
-          acc[26][lane] += w * J[5] * l.r;
-          acc[27][lane] += inside;
-          acc[28][lane] += w * l.r * l.r;
-        }
+      if (it == p.iterations) {  // one pass more than steps: it checks the last one
+        const SampleCosts c = sample_costs(qs, samples, gate, n0);
+        if (c.inliers / std::max(1, c.count) > previous_cost) q = previous;
+        break;
       }
-      NormalEquations6<double> ne;
-      int sum = 0;
-      auto total = [&](int row) {
-        double t = 0.0;
-        for (int lane = 0; lane < kLanes; ++lane)
-          t += acc[row][lane];
-        return t;
-      };
-      ne.H(0, 0) = total(0);
-      ne.H(1, 0) = total(1);
-      ne.H(1, 1) = total(2);
-      ne.H(2, 0) = total(3);
-      ne.H(2, 1) = total(4);
-      ne.H(2, 2) = total(5);
-      ne.H(3, 0) = total(6);
-      ne.H(3, 1) = total(7);
-      ne.H(3, 2) = total(8);
-      ne.H(3, 3) = total(9);
-      ne.H(4, 0) = total(10);
-      ne.H(4, 1) = total(11);
-      ne.H(4, 2) = total(12);
-      ne.H(4, 3) = total(13);
-      ne.H(4, 4) = total(14);
-      ne.H(5, 0) = total(15);
-      ne.H(5, 1) = total(16);
-      ne.H(5, 2) = total(17);
-      ne.H(5, 3) = total(18);
-      ne.H(5, 4) = total(19);
-      ne.H(5, 5) = total(20);
-      ne.g(0) = total(21);
-      ne.g(1) = total(22);
-      ne.g(2) = total(23);
-      ne.g(3) = total(24);
-      ne.g(4) = total(25);
-      ne.g(5) = total(26);
-      sum = static_cast<int>(total(27));
-      const double cost = total(28) / std::max(1, sum);
+      const SampleCosts c = fill_sample_columns<float, kQuadricColumns>(qs, samples, gate, n0,
+                                                                        capacity_, array(kArrays));
+      const double cost = c.inliers / std::max(1, c.count);  // mean Σ w r² over the inliers
       if (cost > previous_cost) {  // the last step made the fit worse: undo it and stop
         q = previous;
         break;
       }
-      if (it == p.iterations) break;  // one pass more than steps: it checks the last one
-      if (sum < p.min_samples) return QuadricStatus::kTooFewSamples;
+      if (c.count < p.min_samples) return QuadricStatus::kTooFewSamples;
+      double Y[100];
+      column_products(array(kArrays), samples.n, capacity_, kQuadricColumns, Y);
+      NormalEquations6<double> ne;  // Σ w J Jᵀ and Σ w J r (sample_columns.hpp)
+      for (int i = 0; i < 6; ++i) {
+        for (int j = 0; j < 6; ++j)
+          ne.H(i, j) = kGammaSign[i] * kGammaSign[j] * Y[kGammaColumn[i] * 10 + kGammaColumn[j]];
+        ne.g(i) = kGammaSign[i] * Y[kGammaColumn[i] * 10 + kColR];
+      }
       previous = q;
       previous_cost = cost;
       Eigen::Matrix<double, 6, 1> delta;
@@ -135,36 +81,53 @@ class GatheredFit {
   }
 
  private:
-  static constexpr int kArrays = 5;  // dx dy dz d² and the mask m (0 for padding)
+  static constexpr int kArrays = 5;  // dx dy dz d² and the mask m (0 for padding), then columns
   static constexpr int kLanes = 8;   // samples per SIMD block
 
-  float* array(int i) { return buffer_.data() + static_cast<std::size_t>(i) * capacity(); }
-  std::size_t capacity() const { return buffer_.size() / kArrays; }
+  float* array(int i) { return buffer_.data() + static_cast<std::size_t>(i) * capacity_; }
 
   // Gathers the valid samples as d = X − p̄; pads to a whole block with masked-out samples.
   int gather(const VertexMap& vertices, const NeighbourhoodPattern& pattern, int u, int v,
              const Eigen::Vector3f& centre) {
     float *dx = array(0), *dy = array(1), *dz = array(2), *d2 = array(3), *m = array(4);
     int n = 0;
-    for (const PixelOffset& o : pattern.offsets) {
-      const int su = u + o.du, sv = v + o.dv;
-      if (!vertices.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
-      const Eigen::Vector3f& X = vertices(su, sv);
-      if (!is_finite_value(X.z())) continue;
-      const Eigen::Vector3f d = X - centre;
-      dx[n] = d.x();
-      dy[n] = d.y();
-      dz[n] = d.z();
-      d2[n] = d.squaredNorm();
-      m[n] = 1.0f;
-      ++n;
+    if (u >= reach_ && v >= reach_ && u + reach_ < vertices.width() &&
+        v + reach_ < vertices.height()) {
+      // The whole pattern is in the image: no bounds checks, and a branch-free compaction (each
+      // sample is written, the count advances only past finite ones).
+      const Eigen::Vector3f* row = &vertices(u, v);
+      for (const std::ptrdiff_t offset : linear_) {
+        const Eigen::Vector3f d = row[offset] - centre;
+        dx[n] = d.x();
+        dy[n] = d.y();
+        dz[n] = d.z();
+        n += is_finite_value(d.z()) ? 1 : 0;
+      }
+    } else {
+      for (const PixelOffset& o : pattern.offsets) {
+        const int su = u + o.du, sv = v + o.dv;
+        if (!vertices.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
+        const Eigen::Vector3f d = vertices(su, sv) - centre;
+        if (!is_finite_value(d.z())) continue;
+        dx[n] = d.x();
+        dy[n] = d.y();
+        dz[n] = d.z();
+        ++n;
+      }
+    }
+    for (int k = 0; k < n; ++k) {
+      d2[k] = dx[k] * dx[k] + dy[k] * dy[k] + dz[k] * dz[k];
+      m[k] = 1.0f;
     }
     for (int k = n; k % kLanes != 0; ++k)
       dx[k] = dy[k] = dz[k] = d2[k] = m[k] = 0.0f;
     return n;
   }
 
+  int capacity_ = 0;
   std::vector<float> buffer_;
+  int reach_ = 0;                       // max |du|, |dv| of the pattern
+  std::vector<std::ptrdiff_t> linear_;  // dv · width + du per offset
 };
 
 }  // namespace
@@ -209,7 +172,7 @@ QuadricMap QuadricFit::estimate(const VertexMap& vertices, const NormalMap& norm
   QuadricMap map(vertices.width(), vertices.height());
 #pragma omp parallel
   {
-    GatheredFit fit(pattern.size());
+    GatheredFit fit(pattern, vertices.width());
 #pragma omp for schedule(dynamic, 4)
     for (int v = 0; v < vertices.height(); ++v) {
       for (int u = 0; u < vertices.width(); ++u) {
