@@ -24,8 +24,9 @@ PipelineFrame PipelineFrontEnd::track(const Frame& frame, bool* keyframe) {
   return f;
 }
 
-KeyframePipeline::KeyframePipeline(const PipelineParams& params, CurvatureSink sink)
-    : PipelineBackEnd(params, std::move(sink)), front_end_(params) {}
+KeyframePipeline::KeyframePipeline(const PipelineParams& params, CurvatureSink sink,
+                                   const RefinerFactory& refiners)
+    : PipelineBackEnd(params, std::move(sink), refiners), front_end_(params) {}
 
 const PipelineFrame& KeyframePipeline::add(const Frame& frame) {
   bool keyframe = false;

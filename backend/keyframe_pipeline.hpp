@@ -42,7 +42,8 @@ class PipelineFrontEnd {
 
 class KeyframePipeline : public PipelineBackEnd {
  public:
-  explicit KeyframePipeline(const PipelineParams& params = {}, CurvatureSink sink = {});
+  explicit KeyframePipeline(const PipelineParams& params = {}, CurvatureSink sink = {},
+                            const RefinerFactory& refiners = {});
 
   /// Tracks the next frame and refines when a keyframe completes a pair or a window. Throws
   /// InputError when the frame's size differs from the first frame's.

@@ -1,6 +1,7 @@
 #include "jpcr/backend/pipeline_back_end.hpp"
 
 #include <chrono>
+#include <stdexcept>
 
 #include "jpcr/quadric/error.hpp"
 #include "jpcr/quadric/quadric_fit.hpp"
@@ -77,17 +78,24 @@ void PipelineParams::validate() const {
   icp_bundle.validate();
 }
 
-PipelineBackEnd::PipelineBackEnd(const PipelineParams& params, CurvatureSink sink)
+PipelineBackEnd::PipelineBackEnd(const PipelineParams& params, CurvatureSink sink,
+                                 const RefinerFactory& refiners)
     : params_(params), sink_(std::move(sink)), window_(std::make_unique<Window>()) {
   params_.validate();
+  const auto make = [&](const std::string& name) {
+    return refiners ? refiners(name, params_.joint, params_.icp_bundle)
+                    : make_refiner(name, params_.joint, params_.icp_bundle);
+  };
   const PipelineMethod m = params_.method;
   if (m == PipelineMethod::kJointFtf || m == PipelineMethod::kPipeline)
-    pair_refiner_ = make_refiner("j-ftf", params_.joint);
+    pair_refiner_ = make("j-ftf");
   if (m == PipelineMethod::kJointFull || m == PipelineMethod::kPipeline)
-    window_refiner_ = make_refiner("j-full", params_.joint);
-  if (m == PipelineMethod::kFixedQuadrics) window_refiner_ = make_refiner("q-full", params_.joint);
-  if (m == PipelineMethod::kIcpBundle)
-    window_refiner_ = make_refiner("icp-bundle", params_.joint, params_.icp_bundle);
+    window_refiner_ = make("j-full");
+  if (m == PipelineMethod::kFixedQuadrics) window_refiner_ = make("q-full");
+  if (m == PipelineMethod::kIcpBundle) window_refiner_ = make("icp-bundle");
+  if ((m != PipelineMethod::kIcpFtf && !pair_refiner_ && !window_refiner_) ||
+      (m == PipelineMethod::kPipeline && !(pair_refiner_ && window_refiner_)))
+    throw std::invalid_argument("PipelineBackEnd: the refiner factory returned no refiner");
 }
 
 PipelineBackEnd::~PipelineBackEnd() = default;

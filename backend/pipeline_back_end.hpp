@@ -90,7 +90,8 @@ using CurvatureSink =
 
 class PipelineBackEnd {
  public:
-  explicit PipelineBackEnd(const PipelineParams& params = {}, CurvatureSink sink = {});
+  explicit PipelineBackEnd(const PipelineParams& params = {}, CurvatureSink sink = {},
+                           const RefinerFactory& refiners = {});
   ~PipelineBackEnd();
   PipelineBackEnd(const PipelineBackEnd&) = delete;
   PipelineBackEnd& operator=(const PipelineBackEnd&) = delete;

@@ -9,6 +9,7 @@
 // "icp-bundle", method.md §9); make_refiner picks one by name.
 #pragma once
 
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -96,5 +97,11 @@ std::vector<VertexMap> window_vertex_maps(const std::vector<Frame>& frames,
 /// naming the choices otherwise, and for "icp-bundle" in a build without Ceres.
 std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams& params = {},
                                       const IcpBundleParams& bundle = {});
+
+/// How the pipeline makes its refiners, by method name; empty means make_refiner above (all on
+/// the CPU). An application injects one to run J-ftf elsewhere, e.g. on a GPU
+/// (device_refiner_factory in cuda/refiner_factory.hpp).
+using RefinerFactory = std::function<std::unique_ptr<Refiner>(
+    const std::string& name, const JointParams& params, const IcpBundleParams& bundle)>;
 
 }  // namespace jpcr

@@ -21,4 +21,13 @@ std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams
   return cpu;
 }
 
+RefinerFactory device_refiner_factory(ComputeDevice device, std::ostream& log) {
+  return [device, &log](const std::string& name, const JointParams& params,
+                        const IcpBundleParams& bundle) -> std::unique_ptr<Refiner> {
+    if (name == "j-ftf") return make_refiner(name, params, device, log);
+    log << "jpcr: " << name << " runs on the cpu\n";
+    return make_refiner(name, params, bundle);
+  };
+}
+
 }  // namespace jpcr

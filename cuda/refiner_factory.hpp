@@ -18,4 +18,9 @@ namespace jpcr {
 std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams& params,
                                       ComputeDevice device, std::ostream& log);
 
+/// The pipeline's refiners for a `device:` setting (PipelineBackEnd, KeyframePipeline): J-ftf
+/// through make_refiner above, the others on the CPU with their own parameters. Each refiner
+/// made writes its line on `log`, which must outlive the factory's use.
+RefinerFactory device_refiner_factory(ComputeDevice device, std::ostream& log);
+
 }  // namespace jpcr

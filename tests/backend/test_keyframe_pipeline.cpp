@@ -157,5 +157,63 @@ TEST(PipelineBackEnd, RefusesFramesOutOfOrder) {
   EXPECT_EQ(back_end.keyframes().size(), 1u);
 }
 
+// An application's refiner factory (e.g. J-ftf on a GPU) is what the pipeline refines with: every
+// refinement goes through the refiners it made, and with CPU refiners the result is the default.
+class CountingRefiner : public Refiner {
+ public:
+  CountingRefiner(std::unique_ptr<Refiner> inner, int* calls)
+      : inner_(std::move(inner)), calls_(calls) {}
+  using Refiner::refine;
+  RefinementResult refine(const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
+                          const std::vector<Eigen::Isometry3d>& initial_poses,
+                          const QuadricMap& initial_quadrics) const override {
+    ++*calls_;
+    return inner_->refine(vertices, camera, initial_poses, initial_quadrics);
+  }
+  std::string name() const override { return inner_->name(); }
+  const JointParams& params() const override { return inner_->params(); }
+
+ private:
+  std::unique_ptr<Refiner> inner_;
+  int* calls_;
+};
+
+TEST(PipelineBackEnd, RefinesWithTheInjectedFactory) {
+  std::vector<std::string> names;
+  int calls = 0;
+  const RefinerFactory factory = [&](const std::string& name, const JointParams& joint,
+                                     const IcpBundleParams& bundle) -> std::unique_ptr<Refiner> {
+    names.push_back(name);
+    return std::make_unique<CountingRefiner>(make_refiner(name, joint, bundle), &calls);
+  };
+  PipelineParams p;
+  p.method = PipelineMethod::kPipeline;
+  p.window = 2;
+  PipelineBackEnd pipeline(p, {}, factory);
+  EXPECT_EQ(names, (std::vector<std::string>{"j-ftf", "j-full"}));
+
+  names.clear();
+  p.method = PipelineMethod::kJointFtf;  // every consecutive pair: 2 refinements of 3 frames
+  p.frontend.threads = 2;
+  const SyntheticSequence seq = walk(3);
+  KeyframePipeline injected(p, {}, factory), plain(p);
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    injected.add(seq.load(i));
+    plain.add(seq.load(i));
+  }
+  injected.finish();
+  plain.finish();
+  EXPECT_EQ(names, (std::vector<std::string>{"j-ftf"}));
+  EXPECT_EQ(calls, 2);
+  const Trajectory a = injected.trajectory(), b = plain.trajectory();
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i)
+    EXPECT_TRUE(a[i].pose.isApprox(b[i].pose, 1e-12)) << "frame " << i;
+  const RefinerFactory none = [](const std::string&, const JointParams&, const IcpBundleParams&) {
+    return std::unique_ptr<Refiner>();
+  };
+  EXPECT_THROW(PipelineBackEnd(p, {}, none), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace jpcr

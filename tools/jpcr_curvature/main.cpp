@@ -8,7 +8,9 @@
 #include <sstream>
 
 #include "cli/arguments.hpp"
+#include "cli/device_option.hpp"
 #include "cli/progress.hpp"
+#include "jpcr/cuda/curvature_estimator_factory.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/curvature_output.hpp"
@@ -32,8 +34,10 @@ struct FrameRecord {
 };
 
 std::unique_ptr<CurvatureEstimator> make_estimator(const std::string& method,
-                                                   const QuadricParams& params) {
-  if (method == "it" || method == "quad-it") return std::make_unique<QuadricFit>(params);
+                                                   const QuadricParams& params,
+                                                   ComputeDevice device) {
+  if (method == "it" || method == "quad-it")
+    return make_curvature_estimator(device, params, std::cerr);
   if (method == "ls" || method == "quad-ls") return std::make_unique<LeastSquaresQuadric>(params);
   throw cli::UsageError("--method must be 'it' (Quad IT) or 'ls' (Quad LS), got '" + method + "'");
 }
@@ -83,13 +87,14 @@ int run(int argc, char** argv) {
           "example:\n  jpcr_synth --scene room_spheres --frames 5 --noise range:1 --out seq\n"
           "  jpcr_curvature --dataset seq --method it --out seq_it\n"
           "  jpcr_eval curvature --gt seq --est seq_it");
+  cli::add_device_option(args);
   return cli::run_program("jpcr_curvature", [&] {
     if (!args.parse(argc, argv)) return 0;
     const Params params = args.has("params") && !args.get("params").empty()
                               ? load_params(args.get("params"))
                               : Params{};
     const std::unique_ptr<CurvatureEstimator> estimator =
-        make_estimator(args.get("method"), params.quadric);
+        make_estimator(args.get("method"), params.quadric, cli::device_from(args, params));
     CurvatureColorParams colors;
     colors.scale = static_cast<float>(args.get_double("color-scale"));
     if (!(colors.scale > 0.0f)) throw cli::UsageError("--color-scale must be positive");

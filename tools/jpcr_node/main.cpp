@@ -16,10 +16,12 @@
 
 #include "cli/arguments.hpp"
 #include "cli/dds_options.hpp"
+#include "cli/device_option.hpp"
 #include "cli/pipeline_options.hpp"
 #include "cli/pipeline_publisher.hpp"
 #include "cli/stop_signal.hpp"
 #include "jpcr/backend/keyframe_pipeline.hpp"
+#include "jpcr/cuda/refiner_factory.hpp"
 #include "jpcr/io/dds/dds_depth_subscriber.hpp"
 #include "jpcr/io/dds/dds_keyframe_link.hpp"
 #include "jpcr/io/params.hpp"
@@ -32,6 +34,7 @@ namespace {
 
 struct NodeOptions {
   PipelineParams pipeline;
+  ComputeDevice device = ComputeDevice::kAuto;  // where J-ftf runs
   DdsConfig dds;
   node::StopRules stop;
   std::chrono::milliseconds flush_timeout{5000};
@@ -47,9 +50,12 @@ int run_all(const NodeOptions& o, const DdsParticipant& participant) {
   DdsDepthSubscriber subscriber(participant, o.dds);
   cli::PipelinePublisher publisher(participant, o.dds);
   std::optional<KeyframePipeline> runner;
-  runner.emplace(o.pipeline, [&](int keyframe, const Frame&, const QuadricMap& quadrics) {
-    publisher.keyframe_final(*runner, keyframe, quadrics);
-  });
+  runner.emplace(
+      o.pipeline,
+      [&](int keyframe, const Frame&, const QuadricMap& quadrics) {
+        publisher.keyframe_final(*runner, keyframe, quadrics);
+      },
+      device_refiner_factory(o.device, std::cerr));
   node::Progress progress;
   const node::Outcome outcome = node::receive(
       o.stop, [&](auto slice) { return subscriber.wait_frame(slice); },
@@ -118,9 +124,12 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
   DdsKeyframeReader reader(participant, o.dds);
   cli::PipelinePublisher publisher(participant, o.dds);
   std::optional<PipelineBackEnd> back_end;
-  back_end.emplace(o.pipeline, [&](int keyframe, const Frame&, const QuadricMap& quadrics) {
-    publisher.keyframe_final(*back_end, keyframe, quadrics);
-  });
+  back_end.emplace(
+      o.pipeline,
+      [&](int keyframe, const Frame&, const QuadricMap& quadrics) {
+        publisher.keyframe_final(*back_end, keyframe, quadrics);
+      },
+      device_refiner_factory(o.device, std::cerr));
   node::StopRules stop = o.stop;
   stop.max_items = 0;  // --max-frames belongs to the front end; its end of stream stops us
   node::Progress progress;
@@ -193,6 +202,7 @@ int node_main(int argc, char** argv) {
       .option("flush-timeout", "seconds to wait for the readers' acknowledgements at exit", "5")
       .option("backend-wait",
               "front end: seconds to wait for a back end before sending the first keyframe", "10");
+  cli::add_device_option(args);
   cli::add_dds_options(args);
   args.epilog(
       "examples:\n  export CYCLONEDDS_URI=file://$PWD/configs/cyclonedds_loopback.xml\n"
@@ -209,7 +219,9 @@ int node_main(int argc, char** argv) {
     if (role != "all" && role != "frontend" && role != "backend")
       throw cli::UsageError("--role must be all, frontend or backend, got '" + role + "'");
     NodeOptions o;
-    o.pipeline = cli::pipeline_params_from(args);
+    Params params;
+    o.pipeline = cli::pipeline_params_from(args, &params);
+    o.device = cli::device_from(args, params);
     o.stop.max_items = args.get_int("max-frames");
     if (o.stop.max_items < 0) throw cli::UsageError("--max-frames must be >= 0");
     o.stop.idle_timeout = args.get_double("idle-timeout");

@@ -8,8 +8,10 @@
 #include <sstream>
 
 #include "cli/arguments.hpp"
+#include "cli/device_option.hpp"
 #include "cli/pipeline_options.hpp"
 #include "cli/progress.hpp"
+#include "jpcr/cuda/refiner_factory.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/curvature_output.hpp"
@@ -59,6 +61,7 @@ int run_main(int argc, char** argv) {
       .option("frames", "FIRST:LAST, 0-based, LAST excluded (default: all)")
       .required("out", "output directory (created)")
       .flag("ply", "also write a PLY point cloud per keyframe");
+  cli::add_device_option(args);
 #ifdef JPCR_HAVE_DDS
   args.flag("dds",
             "also publish odom, keyframe_pose, curvature, curvature_color and path over DDS"
@@ -96,16 +99,21 @@ int run_main(int argc, char** argv) {
     }
 #endif
     const KeyframePipeline* self = nullptr;
-    KeyframePipeline runner(pipeline, [&](int k, const Frame& frame, const QuadricMap& quadrics) {
+    const RefinerFactory refiners =
+        device_refiner_factory(cli::device_from(args, params), std::cerr);
+    KeyframePipeline runner(
+        pipeline,
+        [&](int k, const Frame& frame, const QuadricMap& quadrics) {
 #ifdef JPCR_HAVE_DDS
-      if (dds) dds->keyframe_final(*self, k, quadrics);
+          if (dds) dds->keyframe_final(*self, k, quadrics);
 #endif
-      (void)k;
-      (void)self;
-      // The vertex map is only needed for the PLY; compute_vertex_map is cheap next to J-ftf.
-      writer.write(format_stamp(frame.timestamp), quadrics,
-                   compute_vertex_map(frame.depth, frame.camera));
-    });
+          (void)k;
+          (void)self;
+          // The vertex map is only needed for the PLY; compute_vertex_map is cheap next to J-ftf.
+          writer.write(format_stamp(frame.timestamp), quadrics,
+                       compute_vertex_map(frame.depth, frame.camera));
+        },
+        refiners);
     self = &runner;
     cli::Progress progress("jpcr_run");
     for (std::size_t i = range.first; i < range.last; ++i) {
