@@ -33,7 +33,7 @@ struct TrackResult {
   IcpResult icp;       // the alignment (default-constructed for the first frame)
   bool is_keyframe = false;
   bool kept_last_motion = false;  // the alignment failed; T_wc extrapolates the last good motion
-  double overlap = 1.0;           // fraction of the frame's points that pair with the keyframe
+  double overlap = 1.0;           // fraction of the frame's points that the keyframe also sees
   double preprocess_ms = 0.0;
   double icp_ms = 0.0;
 };

@@ -19,6 +19,7 @@ struct NormalEquations {
   double sum_weights = 0.0;
   std::size_t inliers = 0;  // pairs that passed the rejection tests
   std::size_t valid = 0;    // source points considered
+  std::size_t visible = 0;  // of those, projected onto a valid target vertex (before rejection)
 
   /// Adds w JᵀJ, w J e for one pair. J is single precision (the inner loop), sums are double.
   void add(const Eigen::Matrix<float, 6, 1>& J, float e, float w) {
@@ -46,6 +47,7 @@ struct NormalEquations {
     sum_weights += o.sum_weights;
     inliers += o.inliers;
     valid += o.valid;
+    visible += o.visible;
     return *this;
   }
 

@@ -154,8 +154,6 @@ NormalEquations linearize_point_to_plane(const FramePyramid& source_pyramid,
         const Eigen::Vector3f& X = source.vertices(u, v);
         if (!is_valid(X)) continue;
         ++local.valid;
-        const Eigen::Vector3f& ns = source_normals(u, v);
-        if (!is_valid(ns)) continue;
         // Projective association (method.md §5): p = T X, projected into the target.
         const Eigen::Vector3f p = R * X + t;
         if (p.z() <= 0.0f) continue;
@@ -165,6 +163,9 @@ NormalEquations linearize_point_to_plane(const FramePyramid& source_pyramid,
         const int ut = static_cast<int>(uf), vt = static_cast<int>(vf);   // round to nearest
         const Eigen::Vector3f& q = target.vertices(ut, vt);
         if (!is_valid(q)) continue;  // a borrowed normal can exist where the vertex does not
+        ++local.visible;
+        const Eigen::Vector3f& ns = source_normals(u, v);
+        if (!is_valid(ns)) continue;
         const Eigen::Vector3f& n = target_normals(ut, vt);
         if (!is_valid(n)) continue;
         // Rejection: distance and normal angle.

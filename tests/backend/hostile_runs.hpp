@@ -20,12 +20,14 @@ namespace jpcr::hostile {
 
 constexpr int kWidth = 160, kHeight = 120;
 
-// The defaults (the front end's min_inliers scales itself with the image area), windows of 3.
+// The defaults (the front end's min_inliers scales itself with the image area), windows of 3,
+// and every frame a keyframe (its overlap is below 0.999), so that the back end refines each.
 inline PipelineParams small_frame_params() {
   PipelineParams p;
   p.method = PipelineMethod::kPipeline;
   p.window = 3;
   p.frontend.threads = 2;
+  p.frontend.tracker.keyframe_overlap = 0.999;
   return p;
 }
 
@@ -52,8 +54,9 @@ struct PipelineRun {
 
 // Runs the pipeline over every frame; `spoil` may change frame i before it goes in.
 inline PipelineRun run(const SyntheticSequence& seq,
-                       const std::function<void(std::size_t, Frame&)>& spoil = {}) {
-  KeyframePipeline pipeline(small_frame_params());
+                       const std::function<void(std::size_t, Frame&)>& spoil = {},
+                       const PipelineParams& params = small_frame_params()) {
+  KeyframePipeline pipeline(params);
   for (std::size_t i = 0; i < seq.size(); ++i) {
     Frame f = seq.load(i);
     if (spoil) spoil(i, f);

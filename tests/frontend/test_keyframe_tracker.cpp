@@ -68,6 +68,37 @@ TEST(KeyframeTracker, KeyframesFollowTheTranslationThreshold) {
   EXPECT_EQ(tracker.keyframe().pyramid->levels.size(), 3u);
 }
 
+// The overlap of the keyframe policy measures the view the frame shares with the keyframe, so
+// depth noise leaves it as it is (it used to count the pairs that passed the ICP rejection tests:
+// at 1 % range noise every 640x480 frame became a keyframe).
+TEST(KeyframeTracker, OverlapIsTheSharedViewNotTheDepthNoise) {
+  std::vector<double> overlap[2];
+  for (int noisy = 0; noisy < 2; ++noisy) {
+    SyntheticSequenceOptions o;
+    o.scene = "room_spheres";
+    o.frames = 8;
+    o.width = 160;
+    o.height = 120;
+    o.seed = 5;
+    o.noise = noisy ? "range:2" : "none";
+    const SyntheticSequence seq = make_synthetic_sequence(o);
+    FrontendParams params;
+    params.threads = 2;
+    params.tracker.mode = TrackingMode::frame_to_keyframe;
+    params.tracker.keyframe_translation = 1.0;  // the overlap alone decides
+    params.tracker.keyframe_rotation = 90.0;
+    KeyframeTracker tracker(params, seq.ground_truth(0).value());
+    std::vector<TrackResult> results;
+    track_all(seq, tracker, &results);
+    for (const TrackResult& r : results)
+      if (r.index > 0) overlap[noisy].push_back(r.overlap);
+  }
+  for (std::size_t i = 0; i < overlap[0].size(); ++i) {
+    EXPECT_GT(overlap[0][i], 0.8) << "frame " << i + 1;  // a walk of 7 frames (0.23 s)
+    EXPECT_NEAR(overlap[1][i], overlap[0][i], 0.05) << "frame " << i + 1;
+  }
+}
+
 TEST(KeyframeTracker, AFailedFrameKeepsTheLastGoodMotion) {
   const SyntheticSequence seq = rail(5);
   KeyframeTracker tracker(FrontendParams{}, seq.ground_truth(0).value());
