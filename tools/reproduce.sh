@@ -49,9 +49,10 @@ log=$out/reproduce.log
 : > "$log"
 say() { echo "reproduce: $*" | tee -a "$log" >&2; }
 
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release > /dev/null
-cmake --build "$build" -j"$(nproc)" --target jpcr_synth jpcr_run jpcr_curvature jpcr_eval \
-  bench_icp_peers > /dev/null
+say "building in $build (log: $out/build.log)"
+{ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release &&
+  cmake --build "$build" -j"$(nproc)" --target jpcr_synth jpcr_run jpcr_curvature jpcr_eval \
+    bench_icp_peers; } > "$out/build.log" 2>&1 || { say "build failed (see $out/build.log)"; exit 1; }
 bin=$build/tools
 methods="icp-ftf q-full j-ftf j-full"
 "$bin/jpcr_run" --help | grep -q icp-bundle && methods="icp-ftf icp-bundle q-full j-ftf j-full"
