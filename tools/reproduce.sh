@@ -56,6 +56,8 @@ say "building in $build (log: $out/build.log)"
 bin=$build/tools
 methods="icp-ftf q-full j-ftf j-full"
 "$bin/jpcr_run" --help | grep -q icp-bundle && methods="icp-ftf icp-bundle q-full j-ftf j-full"
+curvature_methods="it ls"  # and the peer, CGAL jet fitting, where jpcr_curvature has it
+"$bin/jpcr_curvature" --help | grep -q "jet (the peer" && curvature_methods="it ls jet"
 start=$(date +%s) failures=0
 
 # The fit's weight and gate grow with the noise (3 σ at σ = k % of the range, as the demo).
@@ -98,7 +100,7 @@ for scene in room_spheres cylinders_boxes torus_saddle; do
       say "$scene noise $k %: $m ($(( $(date +%s) - start )) s)"
       run_method "$seq" "$m" "$params" "$cell/$m"
     done
-    for m in it ls; do
+    for m in $curvature_methods; do
       [[ -d $cell/quad_$m/curvature ]] && continue
       "$bin/jpcr_curvature" --dataset "$seq" --method "$m" --params "$params" \
         --out "$cell/quad_$m" > "$cell/quad_$m.log" 2>&1

@@ -19,8 +19,10 @@ SCENES = ["room_spheres", "cylinders_boxes", "torus_saddle"]
 NOISES = [0, 1, 2, 3]
 POSE_METHODS = ["icp-ftf", "icp-bundle", "q-full", "j-ftf", "j-full"]
 CURVATURE_METHODS = ["quad_ls", "quad_it", "j-ftf", "j-full"]
+CURVATURE_COLUMNS = CURVATURE_METHODS + ["quad_jet"]  # and the peer: CGAL Monge jet fitting
 LABEL = {"icp-ftf": "ICP-ftf", "icp-bundle": "ICP-bundle", "q-full": "Q-full", "j-ftf": "J-ftf",
-         "j-full": "J-full", "quad_ls": "Quad LS", "quad_it": "Quad IT", "pipeline": "pipeline"}
+         "j-full": "J-full", "quad_ls": "Quad LS", "quad_it": "Quad IT", "pipeline": "pipeline",
+         "quad_jet": "CGAL jet (peer)"}
 
 # The paper's Tables I-III (synthetic Datasets 1-3): RMS translation (m) and rotation (rad) per
 # noise level 0..3 % and method (ICP-ftf, ICP-bundle, Q-full, J-ftf, J-full). Our scenes are not
@@ -80,7 +82,7 @@ def curvature_errors(cell, bin_dir):
     """RMS curvature error of each method on the frames every method estimated (the last frame
     of the sequence left out: J-ftf refines a frame only as the first of a pair)."""
     seq = os.path.join(cell, "sequence")
-    dirs = {m: os.path.join(cell, m) for m in CURVATURE_METHODS}
+    dirs = {m: os.path.join(cell, m) for m in CURVATURE_COLUMNS}
     common = None
     for m, d in dirs.items():
         s = stamps(d)
@@ -225,18 +227,19 @@ def main():
     for s in SCENES:
         for k in NOISES:
             curv[s, k] = curvature_errors(os.path.join(a.runs, s, f"range{k}"), a.bin)
-    w("| scene | noise | " + " | ".join(LABEL[m] for m in CURVATURE_METHODS) +
+    w("| scene | noise | " + " | ".join(LABEL[m] for m in CURVATURE_COLUMNS) +
       " | order J-full < J-ftf < Quad IT < Quad LS |")
-    w("|" + "---|" * (len(CURVATURE_METHODS) + 3))
+    w("|" + "---|" * (len(CURVATURE_COLUMNS) + 3))
     for s in SCENES:
         for k in NOISES:
             c = curv[s, k]
-            vals = [c[m]["rms"] if m in c else None for m in CURVATURE_METHODS]
-            cover = [c[m]["coverage"] if m in c else None for m in CURVATURE_METHODS]
+            vals = [c[m]["rms"] if m in c else None for m in CURVATURE_COLUMNS]
+            cover = [c[m]["coverage"] if m in c else None for m in CURVATURE_COLUMNS]
             holds = None
-            if all(v is not None for v in vals):
+            if all(m in c for m in CURVATURE_METHODS):
                 cells += 1
-                holds = vals[3] < vals[2] < vals[1] < vals[0]
+                rms = [c[m]["rms"] for m in CURVATURE_METHODS]  # LS, IT, J-ftf, J-full
+                holds = rms[3] < rms[2] < rms[1] < rms[0]
                 order_holds += holds
             w(f"| {s} | {k} % | " + " | ".join(
                 f"{fmt(v, '.3f')} ({fmt(cv, '.0%')})" for v, cv in zip(vals, cover)) +
@@ -244,7 +247,7 @@ def main():
     w("")
     fig, axes = plt.subplots(1, len(SCENES), figsize=(4.2 * len(SCENES), 3.4), squeeze=False)
     for ax, s in zip(axes[0], SCENES):
-        for m in CURVATURE_METHODS:
+        for m in CURVATURE_COLUMNS:
             ys = [curv[s, k][m]["rms"] if m in curv[s, k] else np.nan for k in NOISES]
             ax.plot(NOISES, ys, marker="o", label=LABEL[m])
         ax.set_title(s)

@@ -6,7 +6,7 @@ set -euo pipefail
 packages=(
   build-essential cmake pkg-config git
   libeigen3-dev libyaml-cpp-dev libgtest-dev libbenchmark-dev
-  libceres-dev libopencv-dev libmrpt-obs-dev mrpt-common
+  libceres-dev libopencv-dev libmrpt-obs-dev mrpt-common libcgal-dev
   cyclonedds-dev cyclonedds-tools
   python3-numpy python3-matplotlib
   clang libclang-rt-14-dev

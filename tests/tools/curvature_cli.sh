@@ -62,4 +62,11 @@ expect 1 "no curvature/ directory" -- "$eval_bin" curvature --gt "$tmp/seq" --es
 printf 'quadric:\n  fit:\n    iterations: many\n' > "$tmp/bad.yaml"
 expect 1 "iterations" -- "$curv" --dataset "$tmp/seq" --params "$tmp/bad.yaml" --out "$tmp/x"
 expect 0 "Quad LS" -- "$curv" --help
+# The peer, CGAL jet fitting, where the build has it: a map as complete as Quad LS's.
+if "$curv" --help | grep -q "jet (the peer"; then
+  expect 0 "cgal-jet" -- "$curv" --dataset "$tmp/seq" --method jet --frames 0:1 --out "$tmp/jet"
+  expect 0 "coverage 100.00 %" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/jet"
+else
+  expect 2 "no CGAL" -- "$curv" --dataset "$tmp/seq" --method jet --out "$tmp/x"
+fi
 exit $fail

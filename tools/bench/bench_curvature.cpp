@@ -6,6 +6,9 @@
 
 #include "jpcr/io/synthetic_sequence.hpp"
 #include "jpcr/quadric/least_squares_quadric.hpp"
+#ifdef JPCR_HAVE_CGAL
+#include "peers/cgal_jet_curvature.hpp"
+#endif
 
 namespace {
 
@@ -41,6 +44,13 @@ void BM_QuadIT(benchmark::State& state) {
 void BM_QuadLS(benchmark::State& state) {
   run<jpcr::LeastSquaresQuadric>(state);
 }
+
+#ifdef JPCR_HAVE_CGAL
+void BM_CgalJetPeer(benchmark::State& state) {  // CGAL Monge jet fitting, same pattern
+  run<jpcr::peers::CgalJetCurvature>(state);
+}
+BENCHMARK(BM_CgalJetPeer)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->UseRealTime();
+#endif
 
 void BM_Normals(benchmark::State& state) {
   const jpcr::VertexMap vertices = frame(static_cast<int>(state.range(0)));

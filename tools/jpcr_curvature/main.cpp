@@ -19,6 +19,9 @@
 #include "jpcr/io/params.hpp"
 #include "jpcr/io/synthetic_writer.hpp"
 #include "jpcr/quadric/least_squares_quadric.hpp"
+#ifdef JPCR_HAVE_CGAL
+#include "peers/cgal_jet_curvature.hpp"
+#endif
 
 namespace jpcr {
 
@@ -33,13 +36,31 @@ struct FrameRecord {
   double milliseconds = 0.0;
 };
 
+#ifdef JPCR_HAVE_CGAL
+constexpr const char* kMethodHelp =
+    "it (Quad IT) | ls (Quad LS) | jet (the peer: CGAL Monge jet fitting)";
+#else
+constexpr const char* kMethodHelp = "it (Quad IT) | ls (Quad LS)";
+#endif
+
 std::unique_ptr<CurvatureEstimator> make_estimator(const std::string& method,
                                                    const QuadricParams& params,
                                                    ComputeDevice device) {
   if (method == "it" || method == "quad-it")
     return make_curvature_estimator(device, params, std::cerr);
   if (method == "ls" || method == "quad-ls") return std::make_unique<LeastSquaresQuadric>(params);
-  throw cli::UsageError("--method must be 'it' (Quad IT) or 'ls' (Quad LS), got '" + method + "'");
+#ifdef JPCR_HAVE_CGAL
+  if (method == "jet" || method == "cgal-jet")
+    return std::make_unique<peers::CgalJetCurvature>(params);
+#else
+  if (method == "jet" || method == "cgal-jet")
+    throw cli::UsageError(
+        "--method jet: this build has no CGAL (install libcgal-dev, reconfigure)");
+#endif
+  throw cli::UsageError(
+      "--method must be 'it' (Quad IT), 'ls' (Quad LS) or 'jet' (CGAL jet "
+      "fitting), got '" +
+      method + "'");
 }
 
 void write_summary(const std::string& path, const std::string& dataset,
@@ -77,7 +98,7 @@ int run(int argc, char** argv) {
       "OUT/ply/<stamp>.ply, and OUT/summary.json.");
   args.required("dataset", "TUM directory (jpcr_synth writes one) or MRPT .rawlog")
       .option("config", "camera YAML (default: the dataset's own camera.yaml or rawlog intrinsics)")
-      .option("method", "it (Quad IT) | ls (Quad LS)", "it")
+      .option("method", kMethodHelp, "it")
       .option("frames", "FIRST:LAST, 0-based, LAST excluded (default: all)")
       .required("out", "output directory (created)")
       .option("params", "parameter YAML (section quadric:)", "")
