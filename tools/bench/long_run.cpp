@@ -3,8 +3,9 @@
 // jpcr_run runs it. Prints a row per tenth of the run: the resident set size (/proc/self/statm,
 // after malloc_trim so that it counts what is live rather than what the allocator keeps cached)
 // and the heap in use (mallinfo2), the tracking ms per frame and the refinement ms per keyframe
-// of that tenth. Then the figures after the warm-up and at the end. Exit status 1 when the RSS
-// grew by more than --max-rss-growth %, or the tracking time per frame or the refinement time per
+// of that tenth. Then the figures over the first block after the warm-up and over the last block
+// (memory: the peak of samples every 25 frames). Exit status 1 when the RSS peak grew by more
+// than --max-rss-growth %, or the tracking time per frame or the refinement time per
 // keyframe by more than --max-time-growth % (the time of one add() varies with how many
 // keyframes a block holds; rendering is not timed).
 //
@@ -124,7 +125,11 @@ int long_run_main(int argc, char** argv) {
     KeyframePipeline pipeline(params, [&](int, const Frame&, const QuadricMap&) { ++maps; });
     std::vector<double> ms(static_cast<std::size_t>(frames));
     std::size_t untrusted = 0;
-    Memory start, peak;
+    // Memory is sampled every `kSampleEvery` frames: the peak over the first block after the
+    // warm-up against the peak over the last block (what a window holds varies from sample to
+    // sample; a leak lifts the peaks).
+    constexpr int kSampleEvery = 25;
+    Memory start, peak, first_peak, last_peak;
     std::printf("%8s %9s %9s %10s %11s %9s %10s\n", "frame", "RSS MiB", "heap MiB", "add ms",
                 "track ms", "refine ms", "keyframes");
     for (int i = 0; i < frames; ++i) {
@@ -134,10 +139,16 @@ int long_run_main(int argc, char** argv) {
       ms[i] = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
       if (!pipeline.verdicts(static_cast<std::size_t>(i)).trusted()) ++untrusted;
       if (i + 1 == warmup) start = memory();
-      if ((i + 1) % tenth == 0) {
+      if ((i + 1) % kSampleEvery == 0 || (i + 1) % tenth == 0) {
         const Memory m = memory();
-        peak.rss_mib = std::max(peak.rss_mib, m.rss_mib);
-        peak.heap_mib = std::max(peak.heap_mib, m.heap_mib);
+        const auto raise = [&m](Memory& to) {
+          to.rss_mib = std::max(to.rss_mib, m.rss_mib);
+          to.heap_mib = std::max(to.heap_mib, m.heap_mib);
+        };
+        raise(peak);
+        if (i + 1 > warmup && i + 1 <= warmup + block) raise(first_peak);
+        if (i + 1 > frames - block) raise(last_peak);
+        if ((i + 1) % tenth != 0) continue;
         const BlockTimes t = block_times(pipeline, i + 1 - tenth, i + 1);
         std::printf("%8d %9.2f %9.2f %10.2f %11.2f %9.1f %10zu\n", i + 1, m.rss_mib, m.heap_mib,
                     mean(ms, i + 1 - tenth, i + 1), t.track_ms, t.refine_ms,
@@ -147,7 +158,7 @@ int long_run_main(int argc, char** argv) {
     }
     pipeline.finish();
     const Memory end = memory();
-    const double rss_growth = growth(start.rss_mib, end.rss_mib);
+    const double rss_growth = growth(first_peak.rss_mib, last_peak.rss_mib);
     const BlockTimes first_block = block_times(pipeline, warmup, warmup + block);
     const BlockTimes last_block = block_times(pipeline, frames - block, frames);
     const double track_growth = growth(first_block.track_ms, last_block.track_ms);
@@ -158,10 +169,12 @@ int long_run_main(int argc, char** argv) {
         o.scene.c_str(), frames, o.width, o.height, o.noise.c_str(), to_string(params.method),
         params.window, pipeline.keyframes().size(), maps, untrusted);
     std::printf(
-        "RSS after %d warm-up frames: %.2f MiB, at the end: %.2f MiB (peak %.2f): growth "
-        "%+.2f %%; heap in use %.2f -> %.2f MiB (%+.2f %%)\n",
-        warmup, start.rss_mib, end.rss_mib, peak.rss_mib, rss_growth, start.heap_mib, end.heap_mib,
-        growth(start.heap_mib, end.heap_mib));
+        "RSS after %d warm-up frames: %.2f MiB, at the end: %.2f MiB, peak %.2f; peak over frames "
+        "%d-%d: %.2f MiB, over frames %d-%d: %.2f MiB: growth %+.2f %%; heap in use, the same "
+        "peaks: %.2f -> %.2f MiB (%+.2f %%)\n",
+        warmup, start.rss_mib, end.rss_mib, peak.rss_mib, warmup, warmup + block - 1,
+        first_peak.rss_mib, frames - block, frames - 1, last_peak.rss_mib, rss_growth,
+        first_peak.heap_mib, last_peak.heap_mib, growth(first_peak.heap_mib, last_peak.heap_mib));
     std::printf(
         "frames %d-%d -> %d-%d: tracking %.2f -> %.2f ms per frame (%+.1f %%), refinement "
         "%.1f -> %.1f ms per keyframe (%zu and %zu keyframes, %+.1f %%), add() %.2f -> %.2f "
