@@ -57,10 +57,15 @@ TEST_P(GatheredStep, MatchesTheReferenceStep) {
               e_step, std::abs(costs[1] / costs[0] - 1),
               std::abs(candidate_costs[1] / candidate_costs[0] - 1));
   // A quadric at the edge of a test (ill-conditioning, min_frame_terms) could flip; allow 0.1 %.
-  // The float rounding of the terms averages out over ~60k quadrics: measured 3e-9 (pose step)
-  // and 2e-8 (costs).
+  // The float rounding of the terms averages out over ~60k quadrics: measured 2e-8 (costs). The
+  // pose step also moves with the few decisions that float rounding can flip (a sample's
+  // residual on the gate, an undamped C_p on the edge of positive definite): measured 3e-9
+  // before the undamped pivot test and the column-product Quad IT (213187d, 287781d), 4e-6 and
+  // 7e-6 (M = 4, 2) after; the threshold of the ratio test is not the cause (1e-8 gives the
+  // same). 1e-4 is 15x that; a wrong sum moves the step by far more (test_gathered_frame_terms
+  // checks each sum to 1e-11 in double lanes).
   EXPECT_NEAR(active[1], active[0], 1e-3 * active[0]);
-  EXPECT_LT(e_step, 1e-6);
+  EXPECT_LT(e_step, 1e-4);
   EXPECT_NEAR(costs[1], costs[0], 1e-6 * costs[0]);
   EXPECT_NEAR(candidate_costs[1], candidate_costs[0], 1e-6 * candidate_costs[0]);
 }
