@@ -83,8 +83,10 @@ PipelineBackEnd::PipelineBackEnd(const PipelineParams& params, CurvatureSink sin
     : params_(params), sink_(std::move(sink)), window_(std::make_unique<Window>()) {
   params_.validate();
   const auto make = [&](const std::string& name) {
-    return refiners ? refiners(name, params_.joint, params_.icp_bundle)
-                    : make_refiner(name, params_.joint, params_.icp_bundle);
+    std::unique_ptr<Refiner> r = refiners ? refiners(name, params_.joint, params_.icp_bundle)
+                                          : make_refiner(name, params_.joint, params_.icp_bundle);
+    if (!r) throw std::invalid_argument("PipelineBackEnd: the refiner factory gave no " + name);
+    return r;
   };
   const PipelineMethod m = params_.method;
   if (m == PipelineMethod::kJointFtf || m == PipelineMethod::kPipeline)
@@ -93,9 +95,6 @@ PipelineBackEnd::PipelineBackEnd(const PipelineParams& params, CurvatureSink sin
     window_refiner_ = make("j-full");
   if (m == PipelineMethod::kFixedQuadrics) window_refiner_ = make("q-full");
   if (m == PipelineMethod::kIcpBundle) window_refiner_ = make("icp-bundle");
-  if ((m != PipelineMethod::kIcpFtf && !pair_refiner_ && !window_refiner_) ||
-      (m == PipelineMethod::kPipeline && !(pair_refiner_ && window_refiner_)))
-    throw std::invalid_argument("PipelineBackEnd: the refiner factory returned no refiner");
 }
 
 PipelineBackEnd::~PipelineBackEnd() = default;
