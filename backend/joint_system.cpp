@@ -104,6 +104,9 @@ void with_sampler(JointSampling sampling, int pattern_size, Body&& body) {
   if (sampling == JointSampling::kReference) {
     DirectSampler<double> sampler;
     body(sampler);
+  } else if (sampling == JointSampling::kGatheredDouble) {
+    GatheredSampler<double> sampler(pattern_size);
+    body(sampler);
   } else {
     GatheredSampler<float> sampler(pattern_size);
     body(sampler);

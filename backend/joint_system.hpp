@@ -56,9 +56,10 @@ struct JointStep {
 };
 
 /// How the CPU evaluates each quadric's per-frame sums: gathered into contiguous arrays and
-/// vectorised across samples in float lanes (gathered_frame_terms.hpp; the default), or sample
-/// by sample in double exactly as the GPU kernels do (the reference the tests compare with).
-enum class JointSampling { kGathered, kReference };
+/// vectorised across samples in float lanes (gathered_frame_terms.hpp; the default), the same in
+/// double lanes (the gathered sums without float rounding, for tests), or sample by sample in
+/// double exactly as the GPU kernels do (the reference the tests compare with).
+enum class JointSampling { kGathered, kGatheredDouble, kReference };
 
 class JointSystem {
  public:
