@@ -7,8 +7,11 @@ tools/setup.sh
 
 build=${JPCR_BUILD_DIR:-build}
 jobs=$(nproc)
+# Without a GPU the CUDA code only has to compile: one architecture (that of tools/gpu-check.sh).
+arch=()
+if ! nvidia-smi -L > /dev/null 2>&1; then arch=(-DCMAKE_CUDA_ARCHITECTURES=90); fi
 # shellcheck disable=SC2086
-cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release ${JPCR_CMAKE_ARGS:-}
+cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release "${arch[@]}" ${JPCR_CMAKE_ARGS:-}
 cmake --build "$build" -j"$jobs"
 ctest --test-dir "$build" --output-on-failure -j"$jobs"
 
