@@ -1,5 +1,6 @@
 #include "jpcr/backend/pipeline_back_end.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <stdexcept>
 
@@ -34,7 +35,7 @@ bool usable(const RefinementResult& r) {
 /// the best quadrics each has so far.
 struct PipelineBackEnd::Window {
   std::vector<Frame> frames;
-  std::vector<int> keyframes;        // indices into keyframes_
+  std::vector<int> keyframes;        // keyframe indices (PipelineBackEnd::keyframe)
   std::vector<QuadricMap> quadrics;  // per slot; empty map = none yet
   void pop_front() {
     frames.erase(frames.begin());
@@ -100,14 +101,51 @@ PipelineBackEnd::PipelineBackEnd(const PipelineParams& params, CurvatureSink sin
 PipelineBackEnd::~PipelineBackEnd() = default;
 
 const PipelineFrame& PipelineBackEnd::add(const PipelineFrame& tracked, const Frame* keyframe) {
-  if (tracked.index != static_cast<int>(frames_.size()))
+  if (tracked.index != static_cast<int>(frame_count()))
     throw InputError("frame " + std::to_string(tracked.index) + " arrived as frame " +
-                     std::to_string(frames_.size()) + " (frames lost or reordered)");
-  if (!keyframe && keyframes_.empty()) throw InputError("the first frame must be a keyframe");
+                     std::to_string(frame_count()) + " (frames lost or reordered)");
+  if (!keyframe && keyframe_count() == 0) throw InputError("the first frame must be a keyframe");
   if (keyframe) on_keyframe(*keyframe, tracked);
   frames_.push_back(tracked);
-  frames_.back().keyframe = static_cast<int>(keyframes_.size()) - 1;
+  frames_.back().keyframe = static_cast<int>(keyframe_count()) - 1;
+  emit_final_frames();
   return frames_.back();
+}
+
+void PipelineBackEnd::set_frame_sink(FrameSink sink) {
+  frame_sink_ = std::move(sink);
+  emit_final_frames();
+}
+
+// Frames hang on keyframes in order, so the final ones are a prefix of those not yet emitted.
+// Without a sink they wait for one (set_frame_sink), unless they are to be forgotten.
+void PipelineBackEnd::emit_final_frames() {
+  if (!frame_sink_ && params_.keep_history) return;
+  while (emitted_ < frame_count()) {
+    const PipelineFrame& f = frame(emitted_);
+    if (static_cast<std::size_t>(f.keyframe) >= final_keyframes_) break;
+    if (frame_sink_) frame_sink_(f, refined_pose(emitted_), verdicts(emitted_));
+    ++emitted_;
+  }
+  if (!params_.keep_history) forget_emitted();
+}
+
+// Forgets the emitted frames but the newest (add() returns it) and the keyframes that neither a
+// held frame, the window, nor the next keyframe (its motion from the newest) needs. Erasing from
+// the front once as many can go as stay keeps it amortised O(1) per frame.
+void PipelineBackEnd::forget_emitted() {
+  const std::size_t frames_gone = std::min(emitted_, frame_count() - 1) - first_frame_;
+  if (frames_gone == 0 || 2 * frames_gone < frames_.size()) return;
+  std::size_t keep = keyframe_count() - 1;
+  keep = std::min(keep, static_cast<std::size_t>(frames_[frames_gone].keyframe));
+  if (!window_->keyframes.empty())
+    keep = std::min(keep, static_cast<std::size_t>(window_->keyframes.front()));
+  const std::size_t keyframes_gone = keep - first_keyframe_;
+  frames_.erase(frames_.begin(), frames_.begin() + static_cast<std::ptrdiff_t>(frames_gone));
+  keyframes_.erase(keyframes_.begin(),
+                   keyframes_.begin() + static_cast<std::ptrdiff_t>(keyframes_gone));
+  first_frame_ += frames_gone;
+  first_keyframe_ += keyframes_gone;
 }
 
 void PipelineBackEnd::on_keyframe(const Frame& frame, const PipelineFrame& tracked) {
@@ -122,9 +160,12 @@ void PipelineBackEnd::on_keyframe(const Frame& frame, const PipelineFrame& track
         previous.refined.pose * (previous.front_end.pose.inverse() * tracked.front_end.pose);
   }
   keyframes_.push_back(k);
+  // Without windows a keyframe's pose is final once its pair ran (below); with windows, once its
+  // window did (refine_window). The first keyframe is the gauge.
+  if (!window_refiner_ || keyframe_count() == 1) final_keyframes_ = keyframe_count();
   if (!pair_refiner_ && !window_refiner_) return;  // ICP-ftf: nothing to refine or keep
   window_->frames.push_back(frame);
-  window_->keyframes.push_back(static_cast<int>(keyframes_.size()) - 1);
+  window_->keyframes.push_back(static_cast<int>(keyframe_count()) - 1);
   window_->quadrics.emplace_back();
   if (pair_refiner_ && window_->frames.size() >= 2) refine_pair();
   if (window_refiner_ && static_cast<int>(window_->frames.size()) == params_.window) {
@@ -139,8 +180,8 @@ void PipelineBackEnd::on_keyframe(const Frame& frame, const PipelineFrame& track
 void PipelineBackEnd::refine_pair() {
   const Clock::time_point t0 = Clock::now();
   const std::size_t n = window_->frames.size();
-  PipelineKeyframe& a = keyframes_[window_->keyframes[n - 2]];
-  PipelineKeyframe& b = keyframes_[window_->keyframes[n - 1]];
+  PipelineKeyframe& a = keyframe_at(window_->keyframes[n - 2]);
+  PipelineKeyframe& b = keyframe_at(window_->keyframes[n - 1]);
   const Eigen::Isometry3d initial = a.refined.pose.inverse() * b.refined.pose;
   const RefinementResult r =
       pair_refiner_->refine(std::vector<Frame>{window_->frames[n - 2], window_->frames[n - 1]},
@@ -160,23 +201,24 @@ void PipelineBackEnd::refine_pair() {
 void PipelineBackEnd::refine_window() {
   const Clock::time_point t0 = Clock::now();
   const std::size_t n = window_->frames.size();
-  const PipelineKeyframe& first = keyframes_[window_->keyframes[0]];
+  const PipelineKeyframe& first = keyframe_at(window_->keyframes[0]);
   std::vector<Eigen::Isometry3d> initial;
   for (int k : window_->keyframes)
-    initial.push_back(first.refined.pose.inverse() * keyframes_[k].refined.pose);
+    initial.push_back(first.refined.pose.inverse() * keyframe_at(k).refined.pose);
   const RefinementResult r = window_refiner_->refine(window_->frames, initial);
-  PipelineKeyframe& last = keyframes_[window_->keyframes[n - 1]];
+  PipelineKeyframe& last = keyframe_at(window_->keyframes[n - 1]);
   last.window = r.report;
   if (usable(r)) {
     const Eigen::Isometry3d anchor = first.refined.pose;
     for (std::size_t j = 1; j < n; ++j)
-      keyframes_[window_->keyframes[j]].refined.pose = anchor * r.poses[j];
+      keyframe_at(window_->keyframes[j]).refined.pose = anchor * r.poses[j];
     window_->quadrics[0] = r.quadrics;
   } else {
     last.used_front_end = true;
   }
   last.refine_ms += ms_since(t0);
-  // Every keyframe but the last is final now; the last one starts the next window.
+  final_keyframes_ = keyframe_count();  // the window's last keyframe is the newest
+  // Every keyframe's curvature but the last is final now; the last one starts the next window.
   while (window_->frames.size() > 1) {
     emit_curvature(0, window_->quadrics[0]);
     window_->pop_front();
@@ -190,6 +232,8 @@ void PipelineBackEnd::finish() {
     emit_curvature(0, window_->quadrics[0]);
     window_->pop_front();
   }
+  final_keyframes_ = keyframe_count();
+  emit_final_frames();
 }
 
 void PipelineBackEnd::emit_curvature(std::size_t slot, const QuadricMap& quadrics) {
@@ -204,9 +248,25 @@ void PipelineBackEnd::emit_curvature(std::size_t slot, const QuadricMap& quadric
         fit.estimate(compute_vertex_map(frame.depth, frame.camera)));
 }
 
+const PipelineFrame& PipelineBackEnd::frame(std::size_t index) const {
+  if (index < first_frame_ || index >= frame_count())
+    throw std::out_of_range("PipelineBackEnd: frame " + std::to_string(index) +
+                            " is not held (frames " + std::to_string(first_frame_) + " to " +
+                            std::to_string(frame_count()) + ")");
+  return frames_[index - first_frame_];
+}
+
+const PipelineKeyframe& PipelineBackEnd::keyframe(std::size_t index) const {
+  if (index < first_keyframe_ || index >= keyframe_count())
+    throw std::out_of_range("PipelineBackEnd: keyframe " + std::to_string(index) +
+                            " is not held (keyframes " + std::to_string(first_keyframe_) + " to " +
+                            std::to_string(keyframe_count()) + ")");
+  return keyframes_[index - first_keyframe_];
+}
+
 StampedPose PipelineBackEnd::refined_pose(std::size_t index) const {
-  const PipelineFrame& f = frames_.at(index);
-  const PipelineKeyframe& k = keyframes_[f.keyframe];
+  const PipelineFrame& f = frame(index);
+  const PipelineKeyframe& k = keyframe(static_cast<std::size_t>(f.keyframe));
   // Re-anchoring: the frame keeps its front-end offset from its keyframe.
   StampedPose p = f.front_end;
   p.pose = k.refined.pose * (k.front_end.pose.inverse() * f.front_end.pose);
@@ -216,7 +276,7 @@ StampedPose PipelineBackEnd::refined_pose(std::size_t index) const {
 Trajectory PipelineBackEnd::trajectory() const {
   Trajectory out;
   out.reserve(frames_.size());
-  for (std::size_t i = 0; i < frames_.size(); ++i)
+  for (std::size_t i = first_frame_; i < frame_count(); ++i)
     out.push_back(refined_pose(i));
   return out;
 }
@@ -226,17 +286,17 @@ bool FrameVerdicts::trusted() const {
 }
 
 FrameVerdicts PipelineBackEnd::verdicts(std::size_t index) const {
-  const PipelineFrame& f = frames_.at(index);
+  const PipelineFrame& f = frame(index);
   FrameVerdicts v;
   v.front_end = f.icp_verdict;
-  const PipelineKeyframe& k = keyframes_[f.keyframe];
+  const PipelineKeyframe& k = keyframe(static_cast<std::size_t>(f.keyframe));
   if (k.pair) v.pair = k.pair->verdict;
   // The gauge keyframe is never refined; any other was last refined by the window it ends, or
   // else by the window of the first later keyframe that ends one (windows share end frames).
   if (f.keyframe == 0 || !window_refiner_) return v;
-  for (std::size_t j = f.keyframe; j < keyframes_.size(); ++j)
-    if (keyframes_[j].window) {
-      v.window = keyframes_[j].window->verdict;
+  for (std::size_t j = f.keyframe; j < keyframe_count(); ++j)
+    if (keyframe(j).window) {
+      v.window = keyframe(j).window->verdict;
       break;
     }
   return v;

@@ -10,6 +10,13 @@
 //   back_end.finish();
 //   Trajectory refined = back_end.trajectory();
 //
+// A frame's refined pose is final once no later refinement can move it: when the J-full window
+// of its keyframe has run (with windows), when its keyframe's pair has (J-ftf), at once (ICP-ftf).
+// A FrameSink receives every frame at that point, in order. With keep_history = false the back end
+// then forgets it, so an unattended run holds only the open window in memory (frames(),
+// keyframes() and trajectory() give what is still held); with the default, it keeps every frame
+// (about 0.5 kB each) and keyframe for trajectory() at the end.
+//
 // Poses are camera-to-world (T_wc, method.md §1); the first frame's pose is the gauge.
 #pragma once
 
@@ -34,6 +41,9 @@ PipelineMethod parse_pipeline_method(const std::string& name);
 struct PipelineParams {
   PipelineMethod method = PipelineMethod::kPipeline;
   int window = 5;  // keyframes per J-full / Q-full / ICP-bundle window (M, reference included)
+  /// Keep every frame and keyframe (trajectory() at the end), or forget each once it is final and
+  /// has gone to the FrameSink (memory bounded by the open window, for unattended runs).
+  bool keep_history = true;
   FrontendParams frontend;
   JointParams joint;
   IcpBundleParams icp_bundle;
@@ -88,6 +98,12 @@ struct FrameVerdicts {
 using CurvatureSink =
     std::function<void(int keyframe, const Frame& frame, const QuadricMap& quadrics)>;
 
+/// Receives each frame once its refined pose is final (see above), in frame order, with that pose
+/// and its verdicts; finish() hands over the rest. The frame's keyframe (keyframe(frame.keyframe))
+/// is still held during the call.
+using FrameSink = std::function<void(const PipelineFrame& frame, const StampedPose& refined,
+                                     const FrameVerdicts& verdicts)>;
+
 class PipelineBackEnd {
  public:
   explicit PipelineBackEnd(const PipelineParams& params = {}, CurvatureSink sink = {},
@@ -100,18 +116,33 @@ class PipelineBackEnd {
   /// set here). `keyframe` is the frame's depth when the front end made it a keyframe (the first
   /// frame always is), else null; a keyframe is refined when it completes a pair or a window.
   const PipelineFrame& add(const PipelineFrame& tracked, const Frame* keyframe);
-  /// Refines what is left (the last partial window); call once after the last frame.
+  /// Refines what is left (the last partial window) and hands every frame still open to the
+  /// FrameSink; call once after the last frame.
   void finish();
+  /// Receives each frame once its pose is final; frames already final go to it at once (with
+  /// keep_history = false, those final before a sink was set are gone).
+  void set_frame_sink(FrameSink sink);
 
-  /// The refined camera-to-world pose of every frame.
+  /// The refined camera-to-world pose of every frame held (all of them with keep_history).
   Trajectory trajectory() const;
   Trajectory front_end_trajectory() const;
-  /// The refined pose of frame `index` (0-based, < frames().size()), without copying the others.
+  /// The refined pose of frame `index` (0-based, held: first_frame() <= index < frame_count()),
+  /// without copying the others. Throws std::out_of_range for a frame not held.
   StampedPose refined_pose(std::size_t index) const;
-  /// The verdicts behind frame `index`'s refined pose (0-based, < frames().size()).
+  /// The verdicts behind frame `index`'s refined pose (held, as above).
   FrameVerdicts verdicts(std::size_t index) const;
+  /// Frame / keyframe `index` (0-based over the whole run); throws std::out_of_range when it is
+  /// not held.
+  const PipelineFrame& frame(std::size_t index) const;
+  const PipelineKeyframe& keyframe(std::size_t index) const;
+  /// The frames and keyframes held, from first_frame() / first_keyframe() on.
   const std::vector<PipelineFrame>& frames() const { return frames_; }
   const std::vector<PipelineKeyframe>& keyframes() const { return keyframes_; }
+  std::size_t first_frame() const { return first_frame_; }
+  std::size_t first_keyframe() const { return first_keyframe_; }
+  /// Frames and keyframes so far, held or not.
+  std::size_t frame_count() const { return first_frame_ + frames_.size(); }
+  std::size_t keyframe_count() const { return first_keyframe_ + keyframes_.size(); }
   const PipelineParams& params() const { return params_; }
 
  private:
@@ -120,13 +151,22 @@ class PipelineBackEnd {
   void refine_pair();
   void refine_window();
   void emit_curvature(std::size_t slot, const QuadricMap& quadrics);
+  void emit_final_frames();
+  void forget_emitted();
+  PipelineKeyframe& keyframe_at(int index) {
+    return keyframes_.at(static_cast<std::size_t>(index) - first_keyframe_);
+  }
 
   PipelineParams params_;
   CurvatureSink sink_;
+  FrameSink frame_sink_;
   std::unique_ptr<Refiner> pair_refiner_, window_refiner_;
   std::unique_ptr<Window> window_;
   std::vector<PipelineFrame> frames_;
   std::vector<PipelineKeyframe> keyframes_;
+  std::size_t first_frame_ = 0, first_keyframe_ = 0;  // indices of frames_[0], keyframes_[0]
+  std::size_t final_keyframes_ = 0;  // keyframes [0, final_keyframes_) have their final pose
+  std::size_t emitted_ = 0;          // frames [0, emitted_) went to the FrameSink
 };
 
 }  // namespace jpcr

@@ -7,17 +7,22 @@
 // (memory: the peak of samples every 25 frames). Exit status 1 when the RSS peak grew by more
 // than --max-rss-growth %, or the tracking time per frame or the refinement time per
 // keyframe by more than --max-time-growth % (the time of one add() varies with how many
-// keyframes a block holds; rendering is not timed).
+// keyframes a block holds; rendering is not timed). The pipeline runs with keep_history = false,
+// as an unattended robot would: each frame goes to a FrameSink once final and is forgotten
+// (--keep-history keeps them all, about 0.5 kB per frame, as jpcr_run does for trajectory.txt).
 //
 //   jpcr_long_run --frames 5000            # tools/bench/long_run.sh runs this
 #include <malloc.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <numeric>
+#include <stdexcept>
 
 #include "cli/arguments.hpp"
 #include "cli/pipeline_options.hpp"
@@ -61,15 +66,19 @@ struct BlockTimes {
   std::size_t keyframes = 0;
 };
 
-BlockTimes block_times(const PipelineBackEnd& p, std::size_t first, std::size_t last) {
+// What the FrameSink saw of each final frame: its tracking time, its keyframe's refinement time
+// (for the frame a keyframe was made from; NaN otherwise) and whether it is trusted.
+struct FinalFrames {
+  std::vector<double> track_ms, refine_ms;
+  std::size_t untrusted = 0;
+};
+
+BlockTimes block_times(const FinalFrames& f, std::size_t first, std::size_t last) {
   BlockTimes t;
-  std::vector<double> track, refine;
-  for (std::size_t i = first; i < last; ++i)
-    track.push_back(p.frames()[i].track_ms);
-  for (const PipelineKeyframe& k : p.keyframes())
-    if (k.frame >= static_cast<int>(first) && k.frame < static_cast<int>(last) && k.frame > 0)
-      refine.push_back(k.refine_ms);
-  t.track_ms = mean(track, 0, track.size());
+  std::vector<double> refine;
+  for (std::size_t i = std::max<std::size_t>(first, 1); i < last; ++i)
+    if (!std::isnan(f.refine_ms[i])) refine.push_back(f.refine_ms[i]);
+  t.track_ms = mean(f.track_ms, first, last);
   t.refine_ms = mean(refine, 0, refine.size());
   t.keyframes = refine.size();
   return t;
@@ -100,7 +109,10 @@ int long_run_main(int argc, char** argv) {
               "%, allowed growth of tracking ms per frame and refinement ms per keyframe", "25")
       .option("method", "pipeline | icp-ftf | j-ftf | j-full | q-full (default: params)")
       .option("window", "keyframes per J-full window, 2-16 (default: params)")
-      .option("params", "parameter YAML (sections frontend, quadric, joint, pipeline)");
+      .option("params", "parameter YAML (sections frontend, quadric, joint, pipeline)")
+      .flag("keep-history",
+            "keep every frame in memory (as jpcr_run) instead of forgetting each "
+            "once final");
   args.epilog("example:\n  jpcr_long_run --frames 500 --max-time-growth 50");
   return cli::run_program("jpcr_long_run", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -120,24 +132,31 @@ int long_run_main(int argc, char** argv) {
     o.seed = static_cast<std::uint64_t>(args.get_int("seed"));
     const SyntheticSequence seq = make_synthetic_sequence(o);
     PipelineParams params = cli::pipeline_params_from(args);
+    params.keep_history = args.get_flag("keep-history");
 
     std::size_t maps = 0;
     KeyframePipeline pipeline(params, [&](int, const Frame&, const QuadricMap&) { ++maps; });
+    FinalFrames final_frames;
+    pipeline.set_frame_sink(
+        [&](const PipelineFrame& f, const StampedPose&, const FrameVerdicts& v) {
+          const PipelineKeyframe& k = pipeline.keyframe(static_cast<std::size_t>(f.keyframe));
+          final_frames.track_ms.push_back(f.track_ms);
+          final_frames.refine_ms.push_back(k.frame == f.index ? k.refine_ms : NAN);
+          if (!v.trusted()) ++final_frames.untrusted;
+        });
     std::vector<double> ms(static_cast<std::size_t>(frames));
-    std::size_t untrusted = 0;
     // Memory is sampled every `kSampleEvery` frames: the peak over the first block after the
     // warm-up against the peak over the last block (what a window holds varies from sample to
     // sample; a leak lifts the peaks).
     constexpr int kSampleEvery = 25;
     Memory start, peak, first_peak, last_peak;
-    std::printf("%8s %9s %9s %10s %11s %9s %10s\n", "frame", "RSS MiB", "heap MiB", "add ms",
-                "track ms", "refine ms", "keyframes");
+    std::printf("%8s %9s %9s %10s %11s %9s %10s %9s\n", "frame", "RSS MiB", "heap MiB", "add ms",
+                "track ms", "refine ms", "keyframes", "held");
     for (int i = 0; i < frames; ++i) {
       const Frame frame = seq.load(static_cast<std::size_t>(i));
       const Clock::time_point t0 = Clock::now();
       pipeline.add(frame);
       ms[i] = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-      if (!pipeline.verdicts(static_cast<std::size_t>(i)).trusted()) ++untrusted;
       if (i + 1 == warmup) start = memory();
       if ((i + 1) % kSampleEvery == 0 || (i + 1) % tenth == 0) {
         const Memory m = memory();
@@ -149,25 +168,32 @@ int long_run_main(int argc, char** argv) {
         if (i + 1 > warmup && i + 1 <= warmup + block) raise(first_peak);
         if (i + 1 > frames - block) raise(last_peak);
         if ((i + 1) % tenth != 0) continue;
-        const BlockTimes t = block_times(pipeline, i + 1 - tenth, i + 1);
-        std::printf("%8d %9.2f %9.2f %10.2f %11.2f %9.1f %10zu\n", i + 1, m.rss_mib, m.heap_mib,
-                    mean(ms, i + 1 - tenth, i + 1), t.track_ms, t.refine_ms,
-                    pipeline.keyframes().size());
+        // Times of the last tenth of the frames that are final by now.
+        const std::size_t done = final_frames.track_ms.size();
+        const BlockTimes t = block_times(
+            final_frames, done > static_cast<std::size_t>(tenth) ? done - tenth : 0, done);
+        std::printf("%8d %9.2f %9.2f %10.2f %11.2f %9.1f %10zu %9zu\n", i + 1, m.rss_mib,
+                    m.heap_mib, mean(ms, i + 1 - tenth, i + 1), t.track_ms, t.refine_ms,
+                    pipeline.keyframe_count(), pipeline.frames().size());
         std::fflush(stdout);
       }
     }
     pipeline.finish();
     const Memory end = memory();
+    if (final_frames.track_ms.size() != static_cast<std::size_t>(frames))
+      throw std::logic_error("the frame sink saw " + std::to_string(final_frames.track_ms.size()) +
+                             " of " + std::to_string(frames) + " frames");
     const double rss_growth = growth(first_peak.rss_mib, last_peak.rss_mib);
-    const BlockTimes first_block = block_times(pipeline, warmup, warmup + block);
-    const BlockTimes last_block = block_times(pipeline, frames - block, frames);
+    const BlockTimes first_block = block_times(final_frames, warmup, warmup + block);
+    const BlockTimes last_block = block_times(final_frames, frames - block, frames);
     const double track_growth = growth(first_block.track_ms, last_block.track_ms);
     const double refine_growth = growth(first_block.refine_ms, last_block.refine_ms);
     std::printf(
-        "%s, %d frames %dx%d, noise %s, method %s, window %d: %zu keyframes, %zu maps, "
+        "%s, %d frames %dx%d, noise %s, method %s, window %d, %s: %zu keyframes, %zu maps, "
         "%zu frames not trusted\n",
         o.scene.c_str(), frames, o.width, o.height, o.noise.c_str(), to_string(params.method),
-        params.window, pipeline.keyframes().size(), maps, untrusted);
+        params.window, params.keep_history ? "every frame kept" : "final frames forgotten",
+        pipeline.keyframe_count(), maps, final_frames.untrusted);
     std::printf(
         "RSS after %d warm-up frames: %.2f MiB, at the end: %.2f MiB, peak %.2f; peak over frames "
         "%d-%d: %.2f MiB, over frames %d-%d: %.2f MiB: growth %+.2f %%; heap in use, the same "

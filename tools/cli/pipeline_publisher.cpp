@@ -6,7 +6,7 @@ namespace jpcr::cli {
 
 void PipelinePublisher::keyframe_final(const PipelineBackEnd& pipeline, int keyframe,
                                        const QuadricMap& quadrics) {
-  const StampedPose& pose = pipeline.keyframes().at(static_cast<std::size_t>(keyframe)).refined;
+  const StampedPose& pose = pipeline.keyframe(static_cast<std::size_t>(keyframe)).refined;
   publisher_.publish_keyframe(pose, quadrics.curvature, render_curvature(quadrics.curvature));
   ++keyframes_published_;
 }
@@ -19,8 +19,8 @@ void PipelinePublisher::frame_added(const PipelineBackEnd& pipeline, const Pipel
 }
 
 void PipelinePublisher::path_if_refined(const PipelineBackEnd& pipeline) {
-  if (pipeline.keyframes().size() == keyframes_seen_) return;
-  keyframes_seen_ = pipeline.keyframes().size();
+  if (pipeline.keyframe_count() == keyframes_seen_) return;
+  keyframes_seen_ = pipeline.keyframe_count();
   publisher_.publish_path(pipeline.trajectory());
 }
 

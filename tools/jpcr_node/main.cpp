@@ -62,7 +62,7 @@ int run_all(const NodeOptions& o, const DdsParticipant& participant) {
       [&](const Frame& frame) {
         const PipelineFrame& f = runner->add(frame);
         publisher.frame_added(*runner, f);
-        progress.frame(f, runner->keyframes().size(), subscriber);
+        progress.frame(f, runner->keyframe_count(), subscriber);
         return node::Step::kProcessed;
       });
   progress.done();
@@ -73,7 +73,7 @@ int run_all(const NodeOptions& o, const DdsParticipant& participant) {
   }
   if (!publisher.flush(o.flush_timeout))
     std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
-  std::cout << "processed " << outcome.processed << " frames, " << runner->keyframes().size()
+  std::cout << "processed " << outcome.processed << " frames, " << runner->keyframe_count()
             << " keyframes, " << publisher.keyframes_published() << " curvature maps; "
             << node::input_summary(subscriber) << ", skipped " << outcome.skipped
             << " frames; stopped by " << outcome.reason << '\n';
@@ -137,10 +137,10 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
       stop, [&](auto slice) { return reader.wait(slice); },
       [&](const DecodedKeyframe& k) {
         const std::size_t first = static_cast<std::size_t>(k.frame_index) - k.tracked.size();
-        if (first != back_end->frames().size())
+        if (first != back_end->frame_count())
           throw InputError("keyframe message for frames " + std::to_string(first) + ".." +
                            std::to_string(k.frame_index) + " after frame " +
-                           std::to_string(back_end->frames().size()) +
+                           std::to_string(back_end->frame_count()) +
                            ": keyframes were lost (start the back end before the front end)");
         for (std::size_t i = 0; i < k.tracked.size(); ++i) {
           PipelineFrame f;
@@ -155,18 +155,18 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
         f.icp_covariance = k.covariance;
         back_end->add(f, &k.frame);
         publisher.path_if_refined(*back_end);
-        progress.keyframe(back_end->keyframes().size(), back_end->frames().size());
+        progress.keyframe(back_end->keyframe_count(), back_end->frame_count());
         return node::Step::kProcessed;
       });
   progress.done();
-  if (!back_end->frames().empty()) {
+  if (back_end->frame_count() > 0) {
     back_end->finish();
     publisher.finished(*back_end);
   }
   if (!publisher.flush(o.flush_timeout))
     std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
-  std::cout << "refined " << back_end->keyframes().size() << " keyframes of "
-            << back_end->frames().size() << " frames, " << publisher.keyframes_published()
+  std::cout << "refined " << back_end->keyframe_count() << " keyframes of "
+            << back_end->frame_count() << " frames, " << publisher.keyframes_published()
             << " curvature maps; rejected " << reader.samples_rejected() << " samples, skipped "
             << outcome.skipped << " messages; stopped by " << outcome.reason << '\n';
   return 0;

@@ -1,0 +1,171 @@
+// The back end's bookkeeping of final frames (pipeline_back_end.hpp): the FrameSink receives
+// every frame once, in order, with the pose and verdicts it ends with, and keep_history = false
+// gives the same results while holding only the open window. The refiners are stand-ins that
+// move the poses by fixed offsets, so that every refinement changes what it touches and the test
+// runs in milliseconds (under AddressSanitizer too).
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "jpcr/backend/pipeline_back_end.hpp"
+
+namespace jpcr {
+namespace {
+
+// Moves every pose but the gauge by `offset` times its index in the window: a refinement whose
+// effect on each keyframe is known and differs between pair and window refiners.
+class ShiftingRefiner : public Refiner {
+ public:
+  ShiftingRefiner(std::string name, Eigen::Vector3d offset)
+      : name_(std::move(name)), offset_(std::move(offset)) {}
+
+  RefinementResult refine(const std::vector<Frame>&,
+                          const std::vector<Eigen::Isometry3d>& initial) const override {
+    RefinementResult r;
+    r.report.method = name_;
+    r.report.verdict = RefinementVerdict::kConverged;
+    for (std::size_t j = 0; j < initial.size(); ++j) {
+      Eigen::Isometry3d T = initial[j];
+      if (j > 0) T.translation() += static_cast<double>(j) * offset_;
+      r.poses.push_back(T);
+    }
+    r.covariance.assign(initial.size(), Matrix6d::Zero());
+    return r;
+  }
+  RefinementResult refine(const std::vector<VertexMap>& vertices, const CameraIntrinsics&,
+                          const std::vector<Eigen::Isometry3d>& initial,
+                          const QuadricMap&) const override {
+    return refine(std::vector<Frame>(vertices.size()), initial);
+  }
+  std::string name() const override { return name_; }
+  const JointParams& params() const override { return params_; }
+
+ private:
+  std::string name_;
+  Eigen::Vector3d offset_;
+  JointParams params_;
+};
+
+std::unique_ptr<Refiner> shifting(const std::string& name, const JointParams&,
+                                  const IcpBundleParams&) {
+  return std::make_unique<ShiftingRefiner>(
+      name, name == "j-ftf" ? Eigen::Vector3d(1e-3, 0, 0) : Eigen::Vector3d(0, 2e-3, -1e-3));
+}
+
+struct Emitted {
+  int index = 0;
+  StampedPose refined;
+  FrameVerdicts verdicts;
+};
+
+constexpr int kFrames = 60;
+constexpr int kKeyframeEvery = 3;  // frames 0, 3, 6, ... are keyframes
+constexpr int kWindow = 4;
+
+// Feeds kFrames tracked frames along a curve; returns what the sink saw, in order.
+std::vector<Emitted> run(PipelineMethod method, bool keep_history, std::size_t* max_held,
+                         std::unique_ptr<PipelineBackEnd>* out = nullptr) {
+  PipelineParams p;
+  p.method = method;
+  p.window = kWindow;
+  p.keep_history = keep_history;
+  auto back_end = std::make_unique<PipelineBackEnd>(p, CurvatureSink{}, shifting);
+  std::vector<Emitted> emitted;
+  back_end->set_frame_sink(
+      [&](const PipelineFrame& f, const StampedPose& pose, const FrameVerdicts& v) {
+        emitted.push_back({f.index, pose, v});
+      });
+  const Frame keyframe;  // the stand-in refiners do not look at the depth
+  *max_held = 0;
+  for (int i = 0; i < kFrames; ++i) {
+    PipelineFrame f;
+    f.index = i;
+    f.front_end.timestamp = 0.033 * i;
+    f.front_end.pose = Eigen::Translation3d(0.01 * i, 0.002 * i * i, 0.0) *
+                       Eigen::AngleAxisd(0.01 * i, Eigen::Vector3d::UnitY());
+    if (i % 7 == 5) f.icp_verdict = IcpVerdict::degenerate;
+    const PipelineFrame& added = back_end->add(f, i % kKeyframeEvery == 0 ? &keyframe : nullptr);
+    EXPECT_EQ(added.index, i);
+    *max_held = std::max(*max_held, back_end->frames().size());
+  }
+  back_end->finish();
+  EXPECT_EQ(back_end->frame_count(), static_cast<std::size_t>(kFrames));
+  EXPECT_EQ(back_end->keyframe_count(), static_cast<std::size_t>(kFrames / kKeyframeEvery));
+  if (out) *out = std::move(back_end);
+  return emitted;
+}
+
+class PipelineHistory : public ::testing::TestWithParam<PipelineMethod> {};
+
+TEST_P(PipelineHistory, EveryFrameGoesToTheSinkOnceInOrderWithItsFinalPose) {
+  std::size_t held = 0;
+  std::unique_ptr<PipelineBackEnd> back_end;
+  const std::vector<Emitted> emitted = run(GetParam(), true, &held, &back_end);
+  ASSERT_EQ(emitted.size(), static_cast<std::size_t>(kFrames));
+  EXPECT_EQ(held, static_cast<std::size_t>(kFrames));  // keep_history: everything is held
+  const Trajectory end = back_end->trajectory();
+  for (int i = 0; i < kFrames; ++i) {
+    const Emitted& e = emitted[i];
+    EXPECT_EQ(e.index, i);
+    // The pose handed over is the one the run ends with: no refinement moved it afterwards.
+    EXPECT_TRUE(e.refined.pose.matrix() == end[i].pose.matrix()) << "frame " << i;
+    const FrameVerdicts v = back_end->verdicts(i);
+    EXPECT_EQ(e.verdicts.front_end, v.front_end) << "frame " << i;
+    EXPECT_EQ(e.verdicts.pair, v.pair) << "frame " << i;
+    EXPECT_EQ(e.verdicts.window, v.window) << "frame " << i;
+  }
+}
+
+TEST_P(PipelineHistory, ForgettingFinalFramesGivesTheSameResultsInBoundedMemory) {
+  std::size_t held_all = 0, held = 0;
+  const std::vector<Emitted> kept = run(GetParam(), true, &held_all, nullptr);
+  std::unique_ptr<PipelineBackEnd> back_end;
+  const std::vector<Emitted> forgot = run(GetParam(), false, &held, &back_end);
+  ASSERT_EQ(forgot.size(), kept.size());
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    EXPECT_EQ(forgot[i].index, kept[i].index);
+    EXPECT_TRUE(forgot[i].refined.pose.matrix() == kept[i].refined.pose.matrix()) << i;
+    EXPECT_EQ(forgot[i].verdicts.pair, kept[i].verdicts.pair) << i;
+    EXPECT_EQ(forgot[i].verdicts.window, kept[i].verdicts.window) << i;
+  }
+  // An open window spans kWindow keyframes of kKeyframeEvery frames; frames are erased once as
+  // many can go as stay, so at most twice that (and the newest frame) is held.
+  EXPECT_LE(held, 2u * (kWindow * kKeyframeEvery + 1));
+  EXPECT_GT(back_end->first_frame(), 0u);
+  EXPECT_GT(back_end->first_keyframe(), 0u);
+  EXPECT_THROW(back_end->refined_pose(0), std::out_of_range);
+  EXPECT_THROW(back_end->keyframe(0), std::out_of_range);
+  EXPECT_THROW(back_end->frame(kFrames), std::out_of_range);
+}
+
+INSTANTIATE_TEST_SUITE_P(Methods, PipelineHistory,
+                         ::testing::Values(PipelineMethod::kIcpFtf, PipelineMethod::kJointFtf,
+                                           PipelineMethod::kJointFull, PipelineMethod::kPipeline),
+                         [](const auto& info) {
+                           std::string name = to_string(info.param);
+                           name.erase(std::remove(name.begin(), name.end(), '-'), name.end());
+                           return name;
+                         });
+
+// A sink set late receives at once the frames that are already final.
+TEST(PipelineHistory, ALateSinkReceivesWhatIsAlreadyFinal) {
+  PipelineParams p;
+  p.method = PipelineMethod::kIcpFtf;
+  PipelineBackEnd back_end(p);
+  const Frame keyframe;
+  for (int i = 0; i < 3; ++i) {
+    PipelineFrame f;
+    f.index = i;
+    back_end.add(f, i == 0 ? &keyframe : nullptr);
+  }
+  int seen = 0;
+  back_end.set_frame_sink([&](const PipelineFrame& f, const StampedPose&, const FrameVerdicts&) {
+    EXPECT_EQ(f.index, seen++);
+  });
+  EXPECT_EQ(seen, 3);
+}
+
+}  // namespace
+}  // namespace jpcr
