@@ -8,7 +8,10 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${JPCR_ASAN_BUILD_DIR:-build-asan}
+# -O1, as the sanitizers' documentation advises: measured on a fresh clone, -O3 took 650 s to
+# build here, and three QuadricFit cases ran 52 s at -O3 against 21 s at -O1.
 CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release \
+  -DCMAKE_C_FLAGS_RELEASE="-O1 -DNDEBUG" -DCMAKE_CXX_FLAGS_RELEASE="-O1 -DNDEBUG" \
   -DJPCR_SANITIZE=address,undefined -DJPCR_FUZZ=ON -DJPCR_WITH_CUDA=OFF \
   -DJPCR_BUILD_BENCHMARKS=OFF -DJPCR_BUILD_SLOW_TESTS=OFF -DJPCR_WITH_CGAL=OFF \
   > "$build.configure.log" 2>&1 || { cat "$build.configure.log"; exit 1; }
