@@ -6,6 +6,7 @@
 
 #include "jpcr/quadric/error.hpp"
 #include "jpcr/quadric/quadric_fit.hpp"
+#include "jpcr/quadric/se3.hpp"
 
 namespace jpcr {
 
@@ -27,6 +28,15 @@ bool usable(const RefinementResult& r) {
   for (const Eigen::Isometry3d& T : r.poses)
     if (!T.matrix().allFinite()) return false;
   return true;
+}
+
+// Keyframe poses are chains of compositions, and each window composes its first pose with the
+// poses relative to it (window first⁻¹ by transpose, then first again): a rotation that is off
+// orthonormal by e comes back off by about 2e, so without this the error doubled every window.
+Eigen::Isometry3d rigid(const Eigen::Isometry3d& T) {
+  Eigen::Isometry3d out = T;
+  out.linear() = orthonormalize(T.linear());
+  return out;
 }
 
 }  // namespace
@@ -117,13 +127,25 @@ void PipelineBackEnd::set_frame_sink(FrameSink sink) {
   emit_final_frames();
 }
 
+// Without refiners every correction is the identity: the front end's poses stay as they are.
+bool PipelineBackEnd::interpolates() const {
+  return params_.interpolate_corrections && (pair_refiner_ || window_refiner_);
+}
+
+// A frame's pose depends on its keyframe and, when corrections are interpolated, on the next one.
+bool PipelineBackEnd::is_final(const PipelineFrame& f) const {
+  const std::size_t k = static_cast<std::size_t>(f.keyframe);
+  if (k >= final_keyframes_) return false;
+  return finished_ || !interpolates() || k + 1 < final_keyframes_;
+}
+
 // Frames hang on keyframes in order, so the final ones are a prefix of those not yet emitted.
 // Without a sink they wait for one (set_frame_sink), unless they are to be forgotten.
 void PipelineBackEnd::emit_final_frames() {
   if (!frame_sink_ && params_.keep_history) return;
   while (emitted_ < frame_count()) {
     const PipelineFrame& f = frame(emitted_);
-    if (static_cast<std::size_t>(f.keyframe) >= final_keyframes_) break;
+    if (!is_final(f)) break;
     if (frame_sink_) frame_sink_(f, refined_pose(emitted_), verdicts(emitted_));
     ++emitted_;
   }
@@ -157,7 +179,7 @@ void PipelineBackEnd::on_keyframe(const Frame& frame, const PipelineFrame& track
     // previous keyframe, applied to that keyframe's refined pose.
     const PipelineKeyframe& previous = keyframes_.back();
     k.refined.pose =
-        previous.refined.pose * (previous.front_end.pose.inverse() * tracked.front_end.pose);
+        rigid(previous.refined.pose * (previous.front_end.pose.inverse() * tracked.front_end.pose));
   }
   keyframes_.push_back(k);
   // Without windows a keyframe's pose is final once its pair ran (below); with windows, once its
@@ -188,7 +210,7 @@ void PipelineBackEnd::refine_pair() {
                             {Eigen::Isometry3d::Identity(), initial});
   b.pair = r.report;
   if (usable(r)) {
-    b.refined.pose = a.refined.pose * r.poses[1];
+    b.refined.pose = rigid(a.refined.pose * r.poses[1]);
     window_->quadrics[n - 2] = r.quadrics;
   } else {
     b.used_front_end = true;
@@ -211,7 +233,7 @@ void PipelineBackEnd::refine_window() {
   if (usable(r)) {
     const Eigen::Isometry3d anchor = first.refined.pose;
     for (std::size_t j = 1; j < n; ++j)
-      keyframe_at(window_->keyframes[j]).refined.pose = anchor * r.poses[j];
+      keyframe_at(window_->keyframes[j]).refined.pose = rigid(anchor * r.poses[j]);
     window_->quadrics[0] = r.quadrics;
   } else {
     last.used_front_end = true;
@@ -233,6 +255,7 @@ void PipelineBackEnd::finish() {
     window_->pop_front();
   }
   final_keyframes_ = keyframe_count();
+  finished_ = true;
   emit_final_frames();
 }
 
@@ -266,10 +289,19 @@ const PipelineKeyframe& PipelineBackEnd::keyframe(std::size_t index) const {
 
 StampedPose PipelineBackEnd::refined_pose(std::size_t index) const {
   const PipelineFrame& f = frame(index);
-  const PipelineKeyframe& k = keyframe(static_cast<std::size_t>(f.keyframe));
-  // Re-anchoring: the frame keeps its front-end offset from its keyframe.
+  const std::size_t ki = static_cast<std::size_t>(f.keyframe);
+  const PipelineKeyframe& k = keyframe(ki);
+  // Re-anchoring (header): C_k, or C_k exp(s log(C_k⁻¹ C_{k+1})) between keyframes.
+  Eigen::Isometry3d correction = k.refined.pose * k.front_end.pose.inverse();
+  if (interpolates() && f.index != k.frame && ki + 1 < keyframe_count()) {
+    const PipelineKeyframe& next = keyframe(ki + 1);
+    const double s = static_cast<double>(f.index - k.frame) / (next.frame - k.frame);
+    const Eigen::Isometry3d step =
+        correction.inverse() * (next.refined.pose * next.front_end.pose.inverse());
+    correction = correction * se3_exp(s * se3_log(step));
+  }
   StampedPose p = f.front_end;
-  p.pose = k.refined.pose * (k.front_end.pose.inverse() * f.front_end.pose);
+  p.pose = correction * f.front_end.pose;
   return p;
 }
 

@@ -1,7 +1,7 @@
 // The back end's half of the keyframe pipeline (architecture.md "Data flow"): it receives the
 // frames the front end tracked, with the depth of those the front end made keyframes, refines the
 // keyframes (J-ftf per keyframe pair, J-full / Q-full per window, method.md §6-§8) and re-anchors
-// every frame to its refined keyframe. KeyframePipeline (keyframe_pipeline.hpp) feeds it from the
+// every frame to its refined keyframes (below). KeyframePipeline (keyframe_pipeline.hpp) feeds it from the
 // front end in the same process; jpcr_node --role backend feeds it from the DDS keyframe topic.
 // Both hand it the same values, so both give the same trajectory.
 //
@@ -10,8 +10,16 @@
 //   back_end.finish();
 //   Trajectory refined = back_end.trajectory();
 //
+// Re-anchoring: a keyframe's correction is C = T_refined T_front_end⁻¹ (a left, world-frame
+// correction). A frame between keyframes k and k+1, a fraction s = (i − i_k) / (i_{k+1} − i_k) of
+// the way in frame index, gets C_k exp(s log(C_k⁻¹ C_{k+1})) T_front_end: the front end's drift
+// between two keyframes accumulates frame by frame, so its correction is spread over the frames
+// instead of landing as one jump at the next keyframe (interpolate_corrections = false keeps the
+// frame's front-end offset from keyframe k alone). Frames after the last keyframe get C_k.
+//
 // A frame's refined pose is final once no later refinement can move it: when the J-full window
-// of its keyframe has run (with windows), when its keyframe's pair has (J-ftf), at once (ICP-ftf).
+// of the keyframes it hangs between has run (with windows), when the next keyframe's pair has
+// (J-ftf), at once (ICP-ftf).
 // A FrameSink receives every frame at that point, in order. With keep_history = false the back end
 // then forgets it, so an unattended run holds only the open window in memory (frames(),
 // keyframes() and trajectory() give what is still held); with the default, it keeps every frame
@@ -44,6 +52,9 @@ struct PipelineParams {
   /// Keep every frame and keyframe (trajectory() at the end), or forget each once it is final and
   /// has gone to the FrameSink (memory bounded by the open window, for unattended runs).
   bool keep_history = true;
+  /// Spread each keyframe's correction over the frames before it (above), or keep every frame's
+  /// front-end offset from the keyframe it hangs on.
+  bool interpolate_corrections = true;
   FrontendParams frontend;
   JointParams joint;
   IcpBundleParams icp_bundle;
@@ -153,6 +164,8 @@ class PipelineBackEnd {
   void emit_curvature(std::size_t slot, const QuadricMap& quadrics);
   void emit_final_frames();
   void forget_emitted();
+  bool interpolates() const;
+  bool is_final(const PipelineFrame& frame) const;
   PipelineKeyframe& keyframe_at(int index) {
     return keyframes_.at(static_cast<std::size_t>(index) - first_keyframe_);
   }
@@ -167,6 +180,7 @@ class PipelineBackEnd {
   std::size_t first_frame_ = 0, first_keyframe_ = 0;  // indices of frames_[0], keyframes_[0]
   std::size_t final_keyframes_ = 0;  // keyframes [0, final_keyframes_) have their final pose
   std::size_t emitted_ = 0;          // frames [0, emitted_) went to the FrameSink
+  bool finished_ = false;
 };
 
 }  // namespace jpcr

@@ -149,6 +149,66 @@ INSTANTIATE_TEST_SUITE_P(Methods, PipelineHistory,
                            return name;
                          });
 
+// Re-anchoring (pipeline_back_end.hpp): the stand-ins correct keyframes by pure translations, so
+// a frame a fraction s of the way from keyframe k to k+1 must be corrected by the translation
+// (1 − s) c_k + s c_{k+1} and no rotation; keyframes keep their refined poses; without
+// interpolation every frame takes its keyframe's correction c_k. Measured below 1e-14; the 1e-12
+// bound also guards the re-orthonormalised keyframe poses: without it the rotation error doubled
+// every window, to 2.6e-8 by frame 57.
+TEST(PipelineHistory, KeyframeCorrectionsAreSpreadOverTheFramesBetween) {
+  double largest_step_in[2] = {0.0, 0.0};  // [interpolate]
+  for (const bool interpolate : {true, false}) {
+    PipelineParams p;
+    p.method = PipelineMethod::kPipeline;
+    p.window = kWindow;
+    p.interpolate_corrections = interpolate;
+    PipelineBackEnd back_end(p, CurvatureSink{}, shifting);
+    const Frame keyframe;
+    for (int i = 0; i < kFrames; ++i) {
+      PipelineFrame f;
+      f.index = i;
+      f.front_end.pose = Eigen::Translation3d(0.01 * i, 0.002 * i * i, 0.0) *
+                         Eigen::AngleAxisd(0.01 * i, Eigen::Vector3d::UnitY());
+      back_end.add(f, i % kKeyframeEvery == 0 ? &keyframe : nullptr);
+    }
+    back_end.finish();
+    const auto correction = [](const Eigen::Isometry3d& refined, const Eigen::Isometry3d& front) {
+      return Eigen::Isometry3d(refined * front.inverse());
+    };
+    double largest_step = 0.0, largest_keyframe_step = 0.0;
+    for (int i = 0; i < kFrames; ++i) {
+      const PipelineFrame& f = back_end.frame(i);
+      const Eigen::Isometry3d c = correction(back_end.refined_pose(i).pose, f.front_end.pose);
+      EXPECT_LT((c.linear() - Eigen::Matrix3d::Identity()).norm(), 1e-12) << "frame " << i;
+      const PipelineKeyframe& k = back_end.keyframe(f.keyframe);
+      const Eigen::Vector3d ck = correction(k.refined.pose, k.front_end.pose).translation();
+      Eigen::Vector3d expected = ck;
+      if (interpolate && static_cast<std::size_t>(f.keyframe) + 1 < back_end.keyframe_count()) {
+        const PipelineKeyframe& next = back_end.keyframe(f.keyframe + 1);
+        const double s = static_cast<double>(i - k.frame) / (next.frame - k.frame);
+        expected = (1 - s) * ck + s * correction(next.refined.pose, next.front_end.pose).translation();
+      }
+      EXPECT_LT((c.translation() - expected).norm(), 1e-12) << "frame " << i;
+      if (i == k.frame) EXPECT_TRUE(back_end.refined_pose(i).pose.isApprox(k.refined.pose, 1e-12));
+      if (i > 0) {
+        const Eigen::Isometry3d before =
+            correction(back_end.refined_pose(i - 1).pose, back_end.frame(i - 1).front_end.pose);
+        largest_step = std::max(largest_step, (c.translation() - before.translation()).norm());
+        if (i == k.frame)
+          largest_keyframe_step =
+              std::max(largest_keyframe_step, (c.translation() - before.translation()).norm());
+      }
+    }
+    // The refiners move keyframes apart, so the correction changes between keyframes.
+    ASSERT_GT(largest_keyframe_step, 1e-4);
+    if (!interpolate) EXPECT_EQ(largest_step, largest_keyframe_step);
+    largest_step_in[interpolate] = largest_step;
+  }
+  // Both runs refine the keyframes alike; spread over kKeyframeEvery = 3 frame steps, no change
+  // of correction from frame to frame exceeds a third of the largest jump at a keyframe.
+  EXPECT_LE(largest_step_in[1], largest_step_in[0] / kKeyframeEvery * (1 + 1e-9));
+}
+
 // A sink set late receives at once the frames that are already final.
 TEST(PipelineHistory, ALateSinkReceivesWhatIsAlreadyFinal) {
   PipelineParams p;
