@@ -4,22 +4,25 @@
 # the real TUM frames with the OpenCV peer, curvature pictures (Fig. 1), timings, and writes a
 # self-contained report (index.md + PNG figures) with the paper's own numbers beside ours.
 #
-#   tools/reproduce.sh [--quick] [--out DIR] [--tum DIR] [--camera CAM.yaml] [--build DIR]
+#   tools/reproduce.sh [--quick] [--out DIR] [--tum DIR] [--camera CAM.yaml] [--build DIR] [--no-build]
 #                      [--size WxH] [--frames N]
 #                      [--window M] [--rail-frames N] [--rail-size WxH] [--real-frames N]
 #                      [--real-jftf-frames N]
 #
 # Full run (default): 640x480 scenes, the report in report/ of the repository. --quick: small
-# sizes and few frames (minutes), the report under --out. Every number in the report comes from this
-# run; report/ is committed output of a full run.
+# sizes and few frames (about a minute), the report under --out, the real frames from the
+# repository's tests/data (unless --tum), and exit status 1 unless every section is present and
+# the pose orderings hold (CI runs it: tests/tools). --no-build: use the programs already built in
+# --build. Every number in the report comes from this run; report/ is committed output of a full
+# run.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 args="$*"
 
-quick=0 out="" tum="../shared/data/tum_fr1_xyz_first300" camera=configs/tum_fr1.yaml
+quick=0 no_build=0 out="" tum="" camera=configs/tum_fr1.yaml
 build=${JPCR_BUILD_DIR:-build}
 size=640x480 frames=5 window=4 rail_frames=200 rail_size=320x240 real_frames=300 real_jftf=30
-usage() { sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; }
 while [[ $# -gt 0 ]]; do
   case $1 in
     --quick) quick=1; shift ;;
@@ -27,6 +30,7 @@ while [[ $# -gt 0 ]]; do
     --tum) tum=$2; shift 2 ;;
     --camera) camera=$2; shift 2 ;;
     --build) build=$2; shift 2 ;;
+    --no-build) no_build=1; shift ;;
     --size) size=$2; shift 2 ;;
     --frames) frames=$2; shift 2 ;;
     --window) window=$2; shift 2 ;;
@@ -39,9 +43,11 @@ while [[ $# -gt 0 ]]; do
   esac
 done
 if [[ $quick == 1 ]]; then
-  size=160x120 frames=4 window=3 rail_frames=24 rail_size=160x120 real_frames=12 real_jftf=3
+  size=160x120 frames=3 window=3 rail_frames=24 rail_size=160x120 real_frames=8 real_jftf=3
   out=${out:-out/reproduce_quick}
+  tum=${tum:-tests/data/tum_fr1_xyz_20}
 fi
+tum=${tum:-../shared/data/tum_fr1_xyz_first300}
 out=${out:-report}
 runs=$out/runs
 mkdir -p "$runs"
@@ -49,11 +55,16 @@ log=$out/reproduce.log
 : > "$log"
 say() { echo "reproduce: $*" | tee -a "$log" >&2; }
 
-say "building in $build (log: $out/build.log)"
-{ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release &&
-  cmake --build "$build" -j"$(nproc)" --target jpcr_synth jpcr_run jpcr_curvature jpcr_eval \
-    bench_icp_peers; } > "$out/build.log" 2>&1 || { say "build failed (see $out/build.log)"; exit 1; }
 bin=$build/tools
+if [[ $no_build == 0 ]]; then
+  say "building in $build (log: $out/build.log)"
+  { cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release &&
+    cmake --build "$build" -j"$(nproc)" --target jpcr_synth jpcr_run jpcr_curvature jpcr_eval \
+      bench_icp_peers; } > "$out/build.log" 2>&1 || { say "build failed (see $out/build.log)"; exit 1; }
+fi
+for p in jpcr_synth jpcr_run jpcr_curvature jpcr_eval bench/bench_icp_peers; do
+  [[ -x $bin/$p ]] || { say "$bin/$p is missing (build it, or leave out --no-build)"; exit 1; }
+done
 methods="icp-ftf q-full j-ftf j-full"
 "$bin/jpcr_run" --help | grep -q icp-bundle && methods="icp-ftf icp-bundle q-full j-ftf j-full"
 curvature_methods="it ls"  # and the peer, CGAL jet fitting, where jpcr_curvature has it
@@ -143,12 +154,14 @@ fi
 
 # 4. The report.
 say "report ($(( $(date +%s) - start )) s)"
+report_status=0
 /usr/bin/python3 tools/reproduce_report.py --runs "$runs" --out "$out" --quick "$quick" \
   --size "$size" --frames "$frames" --window "$window" --tum "$tum" \
   --revision "$(git rev-parse --short HEAD 2>/dev/null || echo unknown)" \
-  --command "tools/reproduce.sh $args" --seconds "$(( $(date +%s) - start ))" --bin "$bin"
+  --command "tools/reproduce.sh $args" --seconds "$(( $(date +%s) - start ))" --bin "$bin" || report_status=$?
 say "done in $(( $(date +%s) - start )) s: $out/index.md"
 if [[ $failures -gt 0 ]]; then
   say "$failures runs failed: their cells are missing from the report"
   exit 1
 fi
+[[ $report_status == 0 ]] || { say "the report's checks failed (above)"; exit 1; }

@@ -381,10 +381,37 @@ def main():
     with open(tmp, "w") as f:
         f.write("\n".join(md) + "\n")
     os.replace(tmp, index)
-    if a.quick and ratios_ftf and sum(r > 1 for r in ratios_ftf) * 2 <= len(ratios_ftf):
-        print("reproduce_report: J-ftf is not below ICP-ftf on most cells", file=sys.stderr)
-        return 1
-    return 0
+    if not a.quick:
+        return 0
+    # --quick is CI's check of this script and of the orderings it measured to hold at the quick
+    # sizes (J-ftf below ICP-ftf and J-full below ICP-bundle in translation, every cell). The
+    # curvature order is reported, not checked: it does not hold (see the claims above).
+    problems = []
+    if complete < len(SCENES) * len(NOISES):
+        problems.append(f"{complete} of {len(SCENES) * len(NOISES)} pose cells complete")
+    problems += [f"J-ftf not below ICP-ftf: {s} {k} %"
+                 for s in SCENES for k in NOISES
+                 if pose[s, k, "icp-ftf"] and pose[s, k, "j-ftf"]
+                 and not pose[s, k, "j-ftf"]["t"] < pose[s, k, "icp-ftf"]["t"]]
+    problems += [f"J-full not below ICP-bundle: {s} {k} %" for s, k, r in ratios_bundle if r >= 1]
+    if cells < len(SCENES) * len(NOISES):
+        problems.append(f"{cells} of {len(SCENES) * len(NOISES)} curvature cells complete")
+    for m in ["icp-ftf", "pipeline"]:
+        if not os.path.exists(os.path.join(rail, m, "trajectory.txt")):
+            problems.append(f"rail: no {m} run")
+    for m in ["icp-ftf", "j-ftf", "pipeline"]:
+        if not (load_json(os.path.join(real, m, "report.json")) or {}).get("errors"):
+            problems.append(f"real data: no {m} run with errors")
+    peers = os.path.join(real, "peers.md")
+    if not (os.path.exists(peers) and os.path.getsize(peers)):
+        problems.append("real data: no OpenCV peer table")
+    for p in problems:
+        print(f"reproduce_report: --quick check failed: {p}", file=sys.stderr)
+    if not problems:
+        print(f"reproduce_report: --quick check passed: every section present; J-ftf below "
+              f"ICP-ftf in {len(ratios_ftf)} of {len(ratios_ftf)} cells, J-full below ICP-bundle "
+              f"in {len(ratios_bundle)} of {len(ratios_bundle)}", file=sys.stderr)
+    return 1 if problems else 0
 
 
 if __name__ == "__main__":

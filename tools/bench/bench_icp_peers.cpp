@@ -85,10 +85,17 @@ struct Metrics {
   double ate = 0.0, rpe_t = 0.0, rpe_r = 0.0, ms = 0.0, ms_median = 0.0;
 };
 
-Metrics evaluate(const Trajectory& gt, const MethodRun& run) {
+// RPE per second (the TUM benchmark's unit), or per frame when the run spans less than a second
+// (a few frames, e.g. tools/reproduce.sh --quick), where no one-second pair exists.
+bool rpe_per_second(const Trajectory& estimate) {
+  return estimate.size() > 1 && estimate.back().timestamp - estimate.front().timestamp >= 1.0;
+}
+
+Metrics evaluate(const Trajectory& gt, const MethodRun& run, bool per_second) {
   Metrics m;
   m.ate = compute_ate(gt, run.trajectory).translation.rmse;
-  const RpeResult rpe = compute_rpe(gt, run.trajectory, 1.0, DeltaUnit::kSeconds);
+  const RpeResult rpe = per_second ? compute_rpe(gt, run.trajectory, 1.0, DeltaUnit::kSeconds)
+                                   : compute_rpe(gt, run.trajectory, 1.0, DeltaUnit::kFrames);
   m.rpe_t = rpe.translation.rmse;
   m.rpe_r = rpe.rotation.rmse;
   std::vector<double> ms = run.ms;
@@ -177,13 +184,16 @@ int run(int argc, char** argv) {
       write_trajectory(args.get("save") + "_opencv.txt", peer.trajectory, "cv::rgbd::ICPOdometry");
     }
     if (args.get_flag("only-jpcr")) peer.trajectory = ours.trajectory;
-    const Metrics a = evaluate(gt, ours), b = evaluate(gt, peer);
+    const bool per_second = rpe_per_second(ours.trajectory);
+    const Metrics a = evaluate(gt, ours, per_second), b = evaluate(gt, peer, per_second);
+    const char* unit = per_second ? "s" : "frame";
     std::printf("%zu frames of %s, %dx%d, depth only, frame to frame, %d threads\n\n", frames,
                 args.get("dataset").c_str(), source->camera().width, source->camera().height,
                 jpcr_threads);
     std::printf(
-        "| method | ATE (m) | RPE (m/s) | RPE (deg/s) | ms/frame (mean) | ms/frame "
-        "(median) | failed frames |\n|---|---|---|---|---|---|---|\n");
+        "| method | ATE (m) | RPE (m/%s) | RPE (deg/%s) | ms/frame (mean) | ms/frame "
+        "(median) | failed frames |\n|---|---|---|---|---|---|---|\n",
+        unit, unit);
     for (const auto& [run, m] : {std::pair(&ours, a), std::pair(&peer, b)}) {
       std::printf("| %s | %.4f | %.4f | %.3f | %.2f | %.2f | %d |\n", run->name.c_str(), m.ate,
                   m.rpe_t, m.rpe_r, m.ms, m.ms_median, run->failures);

@@ -141,7 +141,9 @@ int long_run_main(int argc, char** argv) {
 
     std::size_t maps = 0;
     KeyframePipeline pipeline(params, [&](int, const Frame&, const QuadricMap&) { ++maps; });
-    FinalFrames final_frames;
+    FinalFrames final_frames;  // reserved: the tool's own records must not count as growth
+    final_frames.track_ms.reserve(static_cast<std::size_t>(frames));
+    final_frames.refine_ms.reserve(static_cast<std::size_t>(frames));
     pipeline.set_frame_sink(
         [&](const PipelineFrame& f, const StampedPose&, const FrameVerdicts& v) {
           const PipelineKeyframe& k = pipeline.keyframe(static_cast<std::size_t>(f.keyframe));
