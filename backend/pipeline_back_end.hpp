@@ -1,9 +1,9 @@
 // The back end's half of the keyframe pipeline (architecture.md "Data flow"): it receives the
 // frames the front end tracked, with the depth of those the front end made keyframes, refines the
 // keyframes (J-ftf per keyframe pair, J-full / Q-full per window, method.md §6-§8) and re-anchors
-// every frame to its refined keyframes (below). KeyframePipeline (keyframe_pipeline.hpp) feeds it from the
-// front end in the same process; jpcr_node --role backend feeds it from the DDS keyframe topic.
-// Both hand it the same values, so both give the same trajectory.
+// every frame to its refined keyframes (below). KeyframePipeline (keyframe_pipeline.hpp) feeds it
+// from the front end in the same process; jpcr_node --role backend feeds it from the DDS keyframe
+// topic. Both hand it the same values, so both give the same trajectory.
 //
 //   PipelineBackEnd back_end(params, sink);
 //   for (...) back_end.add(tracked_frame, is_keyframe ? &frame : nullptr);

@@ -186,7 +186,8 @@ TEST(PipelineHistory, KeyframeCorrectionsAreSpreadOverTheFramesBetween) {
       if (interpolate && static_cast<std::size_t>(f.keyframe) + 1 < back_end.keyframe_count()) {
         const PipelineKeyframe& next = back_end.keyframe(f.keyframe + 1);
         const double s = static_cast<double>(i - k.frame) / (next.frame - k.frame);
-        expected = (1 - s) * ck + s * correction(next.refined.pose, next.front_end.pose).translation();
+        expected =
+            (1 - s) * ck + s * correction(next.refined.pose, next.front_end.pose).translation();
       }
       EXPECT_LT((c.translation() - expected).norm(), 1e-12) << "frame " << i;
       if (i == k.frame) EXPECT_TRUE(back_end.refined_pose(i).pose.isApprox(k.refined.pose, 1e-12));

@@ -225,13 +225,13 @@ int long_run_main(int argc, char** argv) {
         "in use %.2f -> %.2f MiB (%+.2f %%)\n"
         "right after each window (%zu and %zu windows): RSS %.2f -> %.2f MiB (%+.2f %%), heap in "
         "use %.2f -> %.2f MiB (%+.2f %%)\n",
-        warmup, start.rss_mib, end.rss_mib, peak.rss_mib, kSampleEvery, warmup,
-        warmup + block - 1, frames - block, frames - 1, first_peak.rss_mib, last_peak.rss_mib,
+        warmup, start.rss_mib, end.rss_mib, peak.rss_mib, kSampleEvery, warmup, warmup + block - 1,
+        frames - block, frames - 1, first_peak.rss_mib, last_peak.rss_mib,
         growth(first_peak.rss_mib, last_peak.rss_mib), first_peak.heap_mib, last_peak.heap_mib,
         growth(first_peak.heap_mib, last_peak.heap_mib), first_windows, last_windows,
         first_window_peak.rss_mib, last_window_peak.rss_mib,
-        growth(first_window_peak.rss_mib, last_window_peak.rss_mib), first_window_peak.heap_mib, last_window_peak.heap_mib,
-        growth(first_window_peak.heap_mib, last_window_peak.heap_mib));
+        growth(first_window_peak.rss_mib, last_window_peak.rss_mib), first_window_peak.heap_mib,
+        last_window_peak.heap_mib, growth(first_window_peak.heap_mib, last_window_peak.heap_mib));
     std::printf(
         "frames %d-%d -> %d-%d: tracking %.2f -> %.2f ms per frame (%+.1f %%), refinement "
         "%.1f -> %.1f ms per keyframe (%zu and %zu keyframes, %+.1f %%), add() %.2f -> %.2f "
@@ -244,10 +244,11 @@ int long_run_main(int argc, char** argv) {
     const double growth_rss = rss_growth;
     const bool rss_ok = growth_rss < args.get_double("max-rss-growth");
     const bool time_ok = time_growth < args.get_double("max-time-growth");
-    std::printf("%s: RSS growth (%s peaks) < %s %%, %s: tracking and refinement time growth < %s %%\n",
-                rss_ok ? "PASS" : "FAIL", by_window ? "after-window" : "periodic",
-                args.get("max-rss-growth").c_str(),
-                time_ok ? "PASS" : "FAIL", args.get("max-time-growth").c_str());
+    std::printf(
+        "%s: RSS growth (%s peaks) < %s %%, %s: tracking and refinement time growth < %s %%\n",
+        rss_ok ? "PASS" : "FAIL", by_window ? "after-window" : "periodic",
+        args.get("max-rss-growth").c_str(), time_ok ? "PASS" : "FAIL",
+        args.get("max-time-growth").c_str());
     return rss_ok && time_ok ? 0 : 1;
   });
 }
