@@ -190,7 +190,9 @@ TEST(PipelineHistory, KeyframeCorrectionsAreSpreadOverTheFramesBetween) {
             (1 - s) * ck + s * correction(next.refined.pose, next.front_end.pose).translation();
       }
       EXPECT_LT((c.translation() - expected).norm(), 1e-12) << "frame " << i;
-      if (i == k.frame) EXPECT_TRUE(back_end.refined_pose(i).pose.isApprox(k.refined.pose, 1e-12));
+      if (i == k.frame) {
+        EXPECT_TRUE(back_end.refined_pose(i).pose.isApprox(k.refined.pose, 1e-12));
+      }
       if (i > 0) {
         const Eigen::Isometry3d before =
             correction(back_end.refined_pose(i - 1).pose, back_end.frame(i - 1).front_end.pose);
@@ -202,7 +204,9 @@ TEST(PipelineHistory, KeyframeCorrectionsAreSpreadOverTheFramesBetween) {
     }
     // The refiners move keyframes apart, so the correction changes between keyframes.
     ASSERT_GT(largest_keyframe_step, 1e-4);
-    if (!interpolate) EXPECT_EQ(largest_step, largest_keyframe_step);
+    if (!interpolate) {
+      EXPECT_EQ(largest_step, largest_keyframe_step);
+    }
     largest_step_in[interpolate] = largest_step;
   }
   // Both runs refine the keyframes alike; spread over kKeyframeEvery = 3 frame steps, no change
