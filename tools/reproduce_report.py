@@ -88,9 +88,19 @@ def stamps(d):
     return {f[:-4] for f in os.listdir(c) if f.endswith(".npy")} if os.path.isdir(c) else set()
 
 
+def sequence_stamps(seq):
+    """The stamps of a TUM sequence's depth frames, as its file names spell them."""
+    path = os.path.join(seq, "depth.txt")
+    if not os.path.isfile(path):
+        return set()
+    with open(path) as f:
+        return {os.path.basename(line.split()[1])[:-4] for line in f
+                if line.strip() and not line.startswith("#")}
+
+
 def curvature_errors(cell, bin_dir):
-    """RMS curvature error of each method on the frames every method estimated (the last frame
-    of the sequence left out: J-ftf refines a frame only as the first of a pair)."""
+    """RMS curvature error of each method on the frames every method estimated (the sequence's
+    last frame left out: J-ftf refines a frame only as the first of a pair)."""
     seq = os.path.join(cell, "sequence")
     dirs = {m: os.path.join(cell, m) for m in CURVATURE_COLUMNS}
     common = None
@@ -99,11 +109,12 @@ def curvature_errors(cell, bin_dir):
         if not s:
             continue
         common = s if common is None else common & s
+    last = max(sequence_stamps(seq), key=float, default=None)
+    if common and last is not None and len(common) > 1:
+        common.discard(last)
     if not common:
         return {}
     common = sorted(common, key=float)
-    if len(common) > 1:
-        common = common[:-1]
     out = {}
     for m, d in dirs.items():
         if not stamps(d):
