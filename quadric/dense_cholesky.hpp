@@ -24,14 +24,14 @@ JPCR_HD bool cholesky_factor(Eigen::Matrix<Scalar, N, N>& H, Scalar eps_rel = Sc
     Scalar d = H(j, j);
     for (int k = 0; k < j; ++k)
       d -= H(j, k) * H(j, k);
-    if (!(d > floor)) return false;  // also catches NaN
-    const Scalar l = std::sqrt(d);
+    if (!(d > floor)) return false;                          // also catches NaN
+    const Scalar l = std::sqrt(d), inverse = Scalar(1) / l;  // one division per column
     H(j, j) = l;
     for (int i = j + 1; i < N; ++i) {
       Scalar s = H(i, j);
       for (int k = 0; k < j; ++k)
         s -= H(i, k) * H(j, k);
-      H(i, j) = s / l;
+      H(i, j) = s * inverse;
     }
   }
   return true;
@@ -40,17 +40,20 @@ JPCR_HD bool cholesky_factor(Eigen::Matrix<Scalar, N, N>& H, Scalar eps_rel = Sc
 /// Solves L Lᵀ x = b with a factor from cholesky_factor, in place in b.
 template <typename Scalar, int N>
 JPCR_HD void cholesky_solve(const Eigen::Matrix<Scalar, N, N>& L, Eigen::Matrix<Scalar, N, 1>& b) {
+  Scalar inverse[N];  // 1 / L_ii, one division per row for both substitutions
+  for (int i = 0; i < N; ++i)
+    inverse[i] = Scalar(1) / L(i, i);
   for (int i = 0; i < N; ++i) {
     Scalar s = b(i);
     for (int k = 0; k < i; ++k)
       s -= L(i, k) * b(k);
-    b(i) = s / L(i, i);
+    b(i) = s * inverse[i];
   }
   for (int i = N - 1; i >= 0; --i) {
     Scalar s = b(i);
     for (int k = i + 1; k < N; ++k)
       s -= L(k, i) * b(k);
-    b(i) = s / L(i, i);
+    b(i) = s * inverse[i];
   }
 }
 

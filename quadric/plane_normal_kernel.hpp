@@ -13,6 +13,28 @@
 
 namespace jpcr {
 
+/// The normal of the least-squares plane through `count` points with Σ d = sum and
+/// Σ d dᵀ = outer (d relative to any fixed origin): the eigenvector of the smallest eigenvalue
+/// of the scatter matrix about their mean (closed-form 3x3 solve, computeDirect, in double),
+/// oriented so that n·centre < 0. All-NaN when count < p.min_points or the points are collinear.
+JPCR_HD Eigen::Vector3f plane_normal_from_moments(const Eigen::Vector3d& sum,
+                                                  const Eigen::Matrix3d& outer, int count,
+                                                  const Eigen::Vector3f& centre,
+                                                  const NormalEstimationParams& p) {
+  const Eigen::Vector3f none = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  if (count < p.min_points) return none;
+  const Eigen::Vector3d mean = sum / count;
+  const Eigen::Matrix3d scatter = outer / count - mean * mean.transpose();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(scatter);
+  const Eigen::Vector3d ev = eig.eigenvalues();
+  // Collinear points (a line of pixels) leave the plane undetermined.
+  if (!(ev(1) > 1e-6 * ev(2)) || !(ev(0) - ev(0) == 0.0)) return none;
+  Eigen::Vector3f n = eig.eigenvectors().col(0).cast<float>().normalized();
+  if (n.dot(centre) > 0.0f) n = -n;  // toward the camera
+  return n;
+}
+
 /// The plane normal at (u, v): the eigenvector of the smallest eigenvalue of the scatter matrix
 /// of the window points about their mean (closed-form 3x3 solve, computeDirect, in double).
 /// Unit, n·X < 0; all-NaN where the centre has no vertex, too few window points remain or the
@@ -37,17 +59,7 @@ JPCR_HD Eigen::Vector3f plane_normal(const VertexView& vertices, int u, int v,
       ++count;
     }
   }
-  if (count < p.min_points) return none;
-  const Eigen::Vector3d mean = sum / count;
-  const Eigen::Matrix3d scatter = outer / count - mean * mean.transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  eig.computeDirect(scatter);
-  const Eigen::Vector3d ev = eig.eigenvalues();
-  // Collinear points (a line of pixels) leave the plane undetermined.
-  if (!(ev(1) > 1e-6 * ev(2)) || !(ev(0) - ev(0) == 0.0)) return none;
-  Eigen::Vector3f n = eig.eigenvectors().col(0).cast<float>().normalized();
-  if (n.dot(centre) > 0.0f) n = -n;  // toward the camera
-  return n;
+  return plane_normal_from_moments(sum, outer, count, centre, p);
 }
 
 }  // namespace jpcr

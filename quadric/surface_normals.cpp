@@ -1,9 +1,103 @@
 #include "jpcr/quadric/surface_normals.hpp"
 
+#include <algorithm>
+#include <vector>
+
 #include "jpcr/quadric/error.hpp"
 #include "jpcr/quadric/plane_normal_kernel.hpp"
 
 namespace jpcr {
+
+namespace {
+
+// Σ (x, y, z) and Σ (xx, xy, xz, yy, yz, zz) of a set of vertices, in double.
+struct Moments {
+  double s[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+
+  void add(const Eigen::Vector3f& X) {
+    const double x = X.x(), y = X.y(), z = X.z();
+    s[0] += x, s[1] += y, s[2] += z;
+    s[3] += x * x, s[4] += x * y, s[5] += x * z, s[6] += y * y, s[7] += y * z, s[8] += z * z;
+  }
+  void add(const Moments& o) {
+    for (int k = 0; k < 9; ++k)
+      s[k] += o.s[k];
+  }
+};
+
+// The plane fit of plane_normal, separably, for the pixels whose whole window is clean: inside
+// the image, every vertex finite and within the depth jump of the centre, so that no point is
+// left out (almost every pixel of a smooth surface). One row of column sums over the window's
+// 2h+1 rows, then 2h+1 of them per pixel: about a quarter of the additions. The same moments up
+// to rounding (uncentred here, so the scatter matrix loses about log10(|X|² / window²) digits of
+// the 16, far below the float normal); any other pixel takes plane_normal itself.
+class CleanWindows {
+ public:
+  CleanWindows(const VertexMap& vertices, const NormalEstimationParams& p)
+      : vertices_(vertices),
+        p_(p),
+        columns_(vertices.width()),
+        finite_(vertices.width()),
+        z_min_(vertices.width()),
+        z_max_(vertices.width()) {}
+
+  /// The column sums for the windows of row v; false when they leave the image.
+  bool load_row(int v) {
+    const int h = p_.half_window;
+    if (v < h || v + h >= vertices_.height()) return false;
+    for (int u = 0; u < vertices_.width(); ++u) {
+      Moments m;
+      bool finite = true;
+      float lo = vertices_(u, v - h).z(), hi = lo;
+      for (int r = v - h; r <= v + h; ++r) {
+        const Eigen::Vector3f& X = vertices_(u, r);
+        finite = finite && is_finite_value(X.z());
+        lo = std::min(lo, X.z());
+        hi = std::max(hi, X.z());
+        m.add(X);
+      }
+      columns_[u] = m;
+      finite_[u] = finite ? 1 : 0;
+      z_min_[u] = lo;
+      z_max_[u] = hi;
+    }
+    return true;
+  }
+
+  /// The normal at (u, v) of the loaded row; false when the window is not clean.
+  bool normal(int u, int v, Eigen::Vector3f& n) const {
+    const int h = p_.half_window;
+    if (u < h || u + h >= vertices_.width()) return false;
+    const Eigen::Vector3f& centre = vertices_(u, v);
+    float lo = centre.z(), hi = lo;
+    for (int c = u - h; c <= u + h; ++c) {
+      if (!finite_[c]) return false;
+      lo = std::min(lo, z_min_[c]);
+      hi = std::max(hi, z_max_[c]);
+    }
+    // plane_normal drops X when |X_z − centre_z| > jump (float); no X is dropped exactly when
+    // the extremes pass, the float difference being monotonic in X_z.
+    const float jump = p_.max_depth_jump * centre.z();
+    if (!(hi - centre.z() <= jump && centre.z() - lo <= jump)) return false;
+    Moments m;
+    for (int c = u - h; c <= u + h; ++c)
+      m.add(columns_[c]);
+    const Eigen::Vector3d sum(m.s[0], m.s[1], m.s[2]);
+    Eigen::Matrix3d outer;
+    outer << m.s[3], m.s[4], m.s[5], m.s[4], m.s[6], m.s[7], m.s[5], m.s[7], m.s[8];
+    n = plane_normal_from_moments(sum, outer, (2 * h + 1) * (2 * h + 1), centre, p_);
+    return true;
+  }
+
+ private:
+  const VertexMap& vertices_;
+  const NormalEstimationParams& p_;
+  std::vector<Moments> columns_;
+  std::vector<unsigned char> finite_;
+  std::vector<float> z_min_, z_max_;
+};
+
+}  // namespace
 
 void NormalEstimationParams::validate() const {
   if (half_window < 1 || half_window > 32) throw InputError("half_window: must be in [1, 32]");
@@ -15,10 +109,19 @@ void NormalEstimationParams::validate() const {
 NormalMap estimate_normals(const VertexMap& vertices, const NormalEstimationParams& params) {
   NormalMap normals(vertices.width(), vertices.height(), invalid_vector());
   const VertexView view{vertices.data(), vertices.width(), vertices.height()};
-#pragma omp parallel for schedule(dynamic, 8)
-  for (int v = 0; v < vertices.height(); ++v)
-    for (int u = 0; u < vertices.width(); ++u)
-      normals(u, v) = plane_normal(view, u, v, params);
+#pragma omp parallel
+  {
+    CleanWindows windows(vertices, params);
+#pragma omp for schedule(dynamic, 8)
+    for (int v = 0; v < vertices.height(); ++v) {
+      const bool loaded = windows.load_row(v);
+      for (int u = 0; u < vertices.width(); ++u) {
+        if (!is_finite_value(vertices(u, v).z())) continue;  // no centre: no normal
+        if (!loaded || !windows.normal(u, v, normals(u, v)))
+          normals(u, v) = plane_normal(view, u, v, params);
+      }
+    }
+  }
   return normals;
 }
 
