@@ -47,10 +47,12 @@ struct PipelineBackEnd::Window {
   std::vector<Frame> frames;
   std::vector<int> keyframes;        // keyframe indices (PipelineBackEnd::keyframe)
   std::vector<QuadricMap> quadrics;  // per slot; empty map = none yet
+  std::vector<std::string> sources;  // per slot: the refiner that gave the quadrics
   void pop_front() {
     frames.erase(frames.begin());
     keyframes.erase(keyframes.begin());
     quadrics.erase(quadrics.begin());
+    sources.erase(sources.begin());
   }
 };
 
@@ -189,6 +191,7 @@ void PipelineBackEnd::on_keyframe(const Frame& frame, const PipelineFrame& track
   window_->frames.push_back(frame);
   window_->keyframes.push_back(static_cast<int>(keyframe_count()) - 1);
   window_->quadrics.emplace_back();
+  window_->sources.emplace_back();
   if (pair_refiner_ && window_->frames.size() >= 2) refine_pair();
   if (window_refiner_ && static_cast<int>(window_->frames.size()) == params_.window) {
     refine_window();
@@ -212,6 +215,7 @@ void PipelineBackEnd::refine_pair() {
   if (usable(r)) {
     b.refined.pose = rigid(a.refined.pose * r.poses[1]);
     window_->quadrics[n - 2] = r.quadrics;
+    window_->sources[n - 2] = pair_refiner_->name();
   } else {
     b.used_front_end = true;
   }
@@ -234,7 +238,10 @@ void PipelineBackEnd::refine_window() {
     const Eigen::Isometry3d anchor = first.refined.pose;
     for (std::size_t j = 1; j < n; ++j)
       keyframe_at(window_->keyframes[j]).refined.pose = rigid(anchor * r.poses[j]);
-    window_->quadrics[0] = r.quadrics;
+    if (r.quadrics.width() > 0) {
+      window_->quadrics[0] = r.quadrics;
+      window_->sources[0] = window_refiner_->name();
+    }
   } else {
     last.used_front_end = true;
   }
@@ -260,9 +267,11 @@ void PipelineBackEnd::finish() {
 }
 
 void PipelineBackEnd::emit_curvature(std::size_t slot, const QuadricMap& quadrics) {
+  const bool refined = quadrics.width() > 0;
+  keyframe_at(window_->keyframes[slot]).curvature = refined ? window_->sources[slot] : "quad-it";
   if (!sink_) return;
   const Frame& frame = window_->frames[slot];
-  if (quadrics.width() > 0) {
+  if (refined) {
     sink_(window_->keyframes[slot], frame, quadrics);
     return;
   }

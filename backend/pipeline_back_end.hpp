@@ -86,6 +86,10 @@ struct PipelineKeyframe {
   std::optional<RefinementReport> window;
   bool used_front_end = false;  // a refinement failed here, so the front end's motion was kept
   double refine_ms = 0.0;
+  /// Whose quadrics gave the keyframe's curvature map: the refiner's name ("j-ftf", "j-full",
+  /// "q-full"), or "quad-it" where no refinement gave the keyframe quadrics (J-full refines
+  /// only the first keyframe of each window; ICP-bundle none). Empty until the map is final.
+  std::string curvature;
 };
 
 /// What the front end and the back end said about one frame (jpcr_run's verdicts.txt): whether

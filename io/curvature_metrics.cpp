@@ -7,6 +7,43 @@
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
+namespace {
+
+bool finite(const Eigen::Vector2f& k) {
+  return std::isfinite(k.x()) && std::isfinite(k.y());
+}
+
+// 1 where the (2R+1)² window around the pixel lies inside the image and every pixel of it has
+// ground truth: a separable test, rows first (runs of finite pixels), then columns.
+Image<unsigned char> interior_mask(const CurvatureImage& gt, int R) {
+  const int w = gt.width(), h = gt.height();
+  Image<int> run_x(w, h, 0);  // finite pixels in the row window [u−R, u+R], 2R+1 when all
+  for (int v = 0; v < h; ++v) {
+    std::vector<int> prefix(static_cast<std::size_t>(w) + 1, 0);
+    for (int u = 0; u < w; ++u)
+      prefix[u + 1] = prefix[u] + (finite(gt(u, v)) ? 1 : 0);
+    for (int u = R; u + R < w; ++u)
+      run_x(u, v) = prefix[u + R + 1] - prefix[u - R];
+  }
+  Image<unsigned char> mask(w, h, 0);
+  const int full = 2 * R + 1;
+  for (int u = R; u + R < w; ++u) {
+    int rows = 0;  // rows of the column window whose row window is full
+    for (int v = 0; v < h; ++v) {
+      rows += run_x(u, v) == full ? 1 : 0;
+      if (v >= full) rows -= run_x(u, v - full) == full ? 1 : 0;
+      if (v >= 2 * R && rows == full) mask(u, v - R) = 1;
+    }
+  }
+  return mask;
+}
+
+}  // namespace
+
+CurvatureErrorAccumulator::CurvatureErrorAccumulator(int support_radius)
+    : support_radius_(support_radius) {
+  if (support_radius < 0) throw InputError("support radius: must be >= 0 pixels");
+}
 
 void CurvatureErrorAccumulator::add(const CurvatureImage& gt, const CurvatureImage& est) {
   if (gt.width() != est.width() || gt.height() != est.height()) {
@@ -14,10 +51,12 @@ void CurvatureErrorAccumulator::add(const CurvatureImage& gt, const CurvatureIma
                      "x" + std::to_string(gt.height()) + ", estimate " +
                      std::to_string(est.width()) + "x" + std::to_string(est.height()));
   }
+  const Image<unsigned char> interior =
+      support_radius_ > 0 ? interior_mask(gt, support_radius_) : Image<unsigned char>();
   for (std::size_t i = 0; i < gt.size(); ++i) {
-    if (!std::isfinite(gt[i].x()) || !std::isfinite(gt[i].y())) continue;
+    if (!finite(gt[i]) || (support_radius_ > 0 && !interior[i])) continue;
     ++gt_valid_;
-    if (!std::isfinite(est[i].x()) || !std::isfinite(est[i].y())) continue;
+    if (!finite(est[i])) continue;
     const double d1 = est[i].x() - gt[i].x(), d2 = est[i].y() - gt[i].y();
     sum_k1_ += d1 * d1;
     sum_k2_ += d2 * d2;
@@ -31,6 +70,7 @@ void CurvatureErrorAccumulator::add(const CurvatureImage& gt, const CurvatureIma
 CurvatureErrors CurvatureErrorAccumulator::result() const {
   CurvatureErrors r;
   r.frames = frames_;
+  r.support_radius = support_radius_;
   r.compared = compared_;
   r.gt_valid = gt_valid_;
   r.coverage = gt_valid_ ? double(compared_) / gt_valid_ : 0.0;

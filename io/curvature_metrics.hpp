@@ -1,9 +1,15 @@
 // Curvature error against ground truth (evaluation.md "Curvature"): RMS of κ₁ and κ₂ (1/m) over
 // pixels valid in both the estimate and the ground truth, and coverage, the fraction of
 // ground-truth-valid pixels the method returns.
+//
+// With a support radius R > 0 only interior pixels count: those whose whole (2R+1)² window has
+// ground truth. The ground truth is NaN on creases and silhouettes (synthetic_ray_caster.hpp), so
+// these are the pixels where a patch fit of radius R sees one smooth surface. Near an edge every
+// patch method fits a surface that is not there, and those pixels can swamp the RMS.
 #pragma once
 
 #include <cstddef>
+#include <vector>
 
 #include "jpcr/quadric/vertex_map.hpp"
 
@@ -18,15 +24,20 @@ struct CurvatureErrors {
   std::size_t compared = 0;  // pixels valid in both
   std::size_t gt_valid = 0;  // pixels with ground truth
   std::size_t frames = 0;
+  int support_radius = 0;  // px; > 0: only interior pixels counted (header)
 };
 
 /// Accumulates frames; throws InputError when a frame's sizes differ.
 class CurvatureErrorAccumulator {
  public:
+  /// `support_radius` R in pixels (0: every ground-truth pixel counts).
+  explicit CurvatureErrorAccumulator(int support_radius = 0);
+
   void add(const CurvatureImage& ground_truth, const CurvatureImage& estimate);
   CurvatureErrors result() const;
 
  private:
+  int support_radius_ = 0;
   double sum_k1_ = 0.0, sum_k2_ = 0.0;
   std::size_t compared_ = 0, gt_valid_ = 0, frames_ = 0;
   std::vector<float> abs_errors_;  // for the median

@@ -103,8 +103,11 @@ TEST(KeyframePipeline, JointFtfBeatsIcpFtfOnANoiseFreeWalk) {
   const RelativeErrors e_ftf = compute_relative_errors(gt, ftf.trajectory);
   EXPECT_LT(e_ftf.translation_rms, e_icp.translation_rms);
   EXPECT_LT(e_ftf.rotation_rms, e_icp.rotation_rms);
-  // Every keyframe has a curvature map, each exactly once, in order.
+  // Every keyframe has a curvature map, each exactly once, in order: J-ftf's for every keyframe
+  // that starts a pair, Quad IT's for the last.
   EXPECT_EQ(ftf.curvature_keyframes, (std::vector<int>{0, 1, 2, 3}));
+  for (std::size_t k = 0; k < 4; ++k)
+    EXPECT_EQ(ftf.keyframes[k].curvature, k < 3 ? "j-ftf" : "quad-it") << "keyframe " << k;
 }
 
 TEST(KeyframePipeline, JointFullWindowsChainAtTheirSharedFrames) {
@@ -121,6 +124,10 @@ TEST(KeyframePipeline, JointFullWindowsChainAtTheirSharedFrames) {
   EXPECT_LT(compute_relative_errors(gt, full.trajectory).translation_rms,
             compute_relative_errors(gt, icp.trajectory).translation_rms);
   EXPECT_EQ(full.curvature_keyframes, (std::vector<int>{0, 1, 2, 3, 4}));
+  // J-full's quadrics live on each window's first keyframe; the others keep Quad IT's.
+  const std::vector<std::string> sources = {"j-full", "quad-it", "j-full", "quad-it", "quad-it"};
+  for (std::size_t k = 0; k < 5; ++k)
+    EXPECT_EQ(full.keyframes[k].curvature, sources[k]) << "keyframe " << k;
 }
 
 TEST(KeyframePipeline, RefusesBadInput) {

@@ -142,6 +142,52 @@ TEST(CurvatureMetrics, RmsAndCoverageOfAHandComputedCase) {
   EXPECT_THROW(acc.add(gt, CurvatureImage(3, 2, Eigen::Vector2f::Zero())), InputError);
 }
 
+// A 20x12 map with ground truth everywhere but column 9 (a crease) and an estimate that is off by
+// 1 at every pixel and by 100 within 2 px of the crease: the support radius R keeps exactly the
+// pixels whose (2R+1)² window misses the crease and the image border, counted by hand.
+TEST(CurvatureMetrics, SupportRadiusKeepsOnlyPixelsAwayFromCreasesAndBorders) {
+  const int w = 20, h = 12, crease = 9;
+  CurvatureImage gt(w, h, Eigen::Vector2f(0, 0)), est(w, h, Eigen::Vector2f(1, -1));
+  for (int v = 0; v < h; ++v) {
+    gt(crease, v) = {kNaN, kNaN};
+    for (int u = crease - 2; u <= crease + 2; ++u)
+      if (u != crease) est(u, v) = {100, 100};
+  }
+  CurvatureErrorAccumulator all;
+  all.add(gt, est);
+  EXPECT_EQ(all.result().gt_valid, static_cast<std::size_t>((w - 1) * h));
+  // The edge band (4 of 19 columns) swamps the RMS.
+  EXPECT_NEAR(all.result().rms, std::sqrt((4 * 1e4 + 15) / 19.0), 1e-9);
+
+  for (int R : {1, 2, 3}) {
+    CurvatureErrorAccumulator acc(R);
+    acc.add(gt, est);
+    const CurvatureErrors e = acc.result();
+    // Interior columns: u in [R, w−1−R] with |u − crease| > R; rows v in [R, h−1−R].
+    std::size_t columns = 0;
+    for (int u = R; u <= w - 1 - R; ++u)
+      columns += std::abs(u - crease) > R ? 1 : 0;
+    const std::size_t expected = columns * static_cast<std::size_t>(h - 2 * R);
+    EXPECT_EQ(e.gt_valid, expected) << "R = " << R;
+    EXPECT_EQ(e.compared, expected) << "R = " << R;
+    EXPECT_EQ(e.support_radius, R);
+    // R = 1 still sees the band at |u − crease| = 2; from R = 2 on only the error of 1 is left.
+    if (R >= 2) {
+      EXPECT_NEAR(e.rms, 1.0, 1e-9) << "R = " << R;
+    }
+    // R = 1: 15 interior columns, 2 of them (u = 7, 11) in the band.
+    if (R == 1) {
+      EXPECT_NEAR(e.rms, std::sqrt((2 * 1e4 + 13) / 15.0), 1e-9);
+    }
+  }
+  EXPECT_THROW(CurvatureErrorAccumulator(-1), InputError);
+  // A window larger than the image leaves nothing to compare (NaN, not 0).
+  CurvatureErrorAccumulator huge(7);
+  huge.add(gt, est);
+  EXPECT_EQ(huge.result().compared, 0u);
+  EXPECT_TRUE(std::isnan(huge.result().rms));
+}
+
 TEST(QuadricParamsYaml, DefaultYamlStatesTheBuiltInDefaults) {
   const QuadricParams shipped =
       load_params(std::string(JPCR_SOURCE_DIR) + "/configs/default.yaml").quadric;

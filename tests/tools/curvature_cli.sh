@@ -29,6 +29,11 @@ expect 0 "coverage 100.00 %" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tm
 expect 0 "frames: 2 compared" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/ls"
 "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --json --out "$tmp/it.json" > /dev/null ||
   { echo "FAIL: eval json"; fail=1; }
+# Interior pixels only (--support pattern: the fit's ±5 px span at 160 wide): fewer pixels, and
+# the error there below the error over every pixel (the edges are where patch fits go wrong).
+"$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --json --support pattern \
+  --out "$tmp/it_interior.json" > /dev/null || { echo "FAIL: eval --support"; fail=1; }
+expect 1 "--support: expected a radius" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --support -3
 if /usr/bin/python3 -c 'import numpy' 2>/dev/null; then
   /usr/bin/python3 - "$tmp" <<'PY' || fail=1
 import glob, json, sys, numpy as np
@@ -36,6 +41,9 @@ t = sys.argv[1]
 r = json.load(open(t + "/it.json"))
 assert r["frames"] == 3 and 0.9 < r["coverage"] <= 1.0, r
 assert 0 < r["rms"] < 50, r
+i = json.load(open(t + "/it_interior.json"))
+assert i["support_radius_px"] == 5 and 0 < i["gt_valid_pixels"] < r["gt_valid_pixels"], (i, r)
+assert i["rms"] < r["rms"], (i, r)
 k = np.load(sorted(glob.glob(t + "/it/curvature/*.npy"))[0])
 assert k.shape == (120, 160, 2) and k.dtype == np.float32, (k.shape, k.dtype)
 valid = np.isfinite(k[..., 0])

@@ -3,7 +3,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <set>
+#include <string>
 
 #include "cli/arguments.hpp"
 #include "jpcr/io/atomic_file.hpp"
@@ -11,6 +13,7 @@
 #include "jpcr/io/curvature_output.hpp"
 #include "jpcr/io/json_writer.hpp"
 #include "jpcr/quadric/error.hpp"
+#include "jpcr/quadric/quadric_params.hpp"
 #include "jpcr_eval/eval_commands.hpp"
 
 namespace jpcr::eval {
@@ -31,6 +34,23 @@ std::set<std::string> curvature_stamps(const std::string& dir) {
   return stamps;
 }
 
+// --support: a radius in pixels, or "pattern": the span of the default fit pattern (method.md
+// §2, ±18 px at 640 wide) at the maps' width, so interior pixels are those whose whole pattern
+// lies on one smooth surface.
+int support_radius(const std::string& text, int width) {
+  if (text == "pattern") return PatternParams{}.for_width(width).span();
+  std::size_t end = 0;
+  int r = -1;
+  try {
+    r = std::stoi(text, &end);
+  } catch (const std::exception&) {
+  }
+  if (end != text.size() || r < 0)
+    throw InputError("--support: expected a radius in pixels (>= 0) or 'pattern', got '" + text +
+                     "'");
+  return r;
+}
+
 void write_json(std::ostream& out, const CurvatureErrors& e) {
   JsonWriter json(out);
   json.begin_object()
@@ -42,6 +62,7 @@ void write_json(std::ostream& out, const CurvatureErrors& e) {
       .field("coverage", e.coverage)
       .field("compared_pixels", e.compared)
       .field("gt_valid_pixels", e.gt_valid)
+      .field("support_radius_px", e.support_radius)
       .end_object();
   out << '\n';
 }
@@ -54,9 +75,14 @@ int run_curvature(int argc, char** argv) {
       "Principal-curvature error against ground truth: RMS of k1 and k2 (1/m) over\n"
       "pixels valid in both, median absolute error, and coverage (the fraction of\n"
       "ground-truth pixels the estimate covers). Frames are matched by stamp\n"
-      "(GT/curvature/<stamp>.npy and EST/curvature/<stamp>.npy).");
+      "(GT/curvature/<stamp>.npy and EST/curvature/<stamp>.npy). With --support R\n"
+      "only interior pixels count: those whose (2R+1)x(2R+1) window has ground truth\n"
+      "everywhere, so a patch fit of radius R sees one smooth surface (no crease,\n"
+      "rim or silhouette in it).");
   args.required("gt", "ground-truth directory (jpcr_synth output)")
       .required("est", "estimate directory (jpcr_curvature or jpcr_run output)")
+      .option("support",
+              "R in px, or 'pattern' (the fit's span: 18 px at 640 wide); 0 = every pixel", "0")
       .option("out", "also write the JSON report to this file")
       .flag("json", "print JSON instead of text")
       .epilog("example:\n  jpcr_eval curvature --gt seq --est seq_it --json");
@@ -64,14 +90,15 @@ int run_curvature(int argc, char** argv) {
     if (!args.parse(argc, argv)) return 0;
     const std::set<std::string> gt = curvature_stamps(args.get("gt"));
     const std::set<std::string> est = curvature_stamps(args.get("est"));
-    CurvatureErrorAccumulator acc;
+    std::optional<CurvatureErrorAccumulator> acc;
     for (const std::string& stamp : est) {
       if (!gt.count(stamp)) continue;
       const std::string name = "curvature/" + stamp + ".npy";
-      acc.add(read_curvature_npy((fs::path(args.get("gt")) / name).string()),
-              read_curvature_npy((fs::path(args.get("est")) / name).string()));
+      const CurvatureImage truth = read_curvature_npy((fs::path(args.get("gt")) / name).string());
+      if (!acc) acc.emplace(support_radius(args.get("support"), truth.width()));
+      acc->add(truth, read_curvature_npy((fs::path(args.get("est")) / name).string()));
     }
-    const CurvatureErrors e = acc.result();
+    const CurvatureErrors e = acc ? acc->result() : CurvatureErrors{};
     if (e.frames == 0)
       throw InputError(args.get("est") + ": no curvature map shares a stamp with " +
                        args.get("gt"));
@@ -84,8 +111,8 @@ int run_curvature(int argc, char** argv) {
                   est.size(), gt.size());
       std::printf("rms k1 %.4f 1/m  rms k2 %.4f 1/m  rms %.4f 1/m  median |err| %.4f 1/m\n",
                   e.rms_k1, e.rms_k2, e.rms, e.median_abs);
-      std::printf("coverage %.2f %% (%zu of %zu ground-truth pixels)\n", 100.0 * e.coverage,
-                  e.compared, e.gt_valid);
+      std::printf("coverage %.2f %% (%zu of %zu ground-truth pixels%s)\n", 100.0 * e.coverage,
+                  e.compared, e.gt_valid, e.support_radius > 0 ? ", interior only" : "");
     }
     return 0;
   });

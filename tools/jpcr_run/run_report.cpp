@@ -95,7 +95,10 @@ void write_report(std::ostream& out, const std::string& dataset, const KeyframeP
     json.begin_object().field("frame", k.frame).field("stamp", k.refined.timestamp);
     write_refinement(json, "pair", k.pair);
     write_refinement(json, "window", k.window);
-    json.field("used_front_end", k.used_front_end).field("refine_ms", k.refine_ms).end_object();
+    json.field("used_front_end", k.used_front_end)
+        .field("refine_ms", k.refine_ms)
+        .field("curvature", k.curvature)
+        .end_object();
   }
   json.end_array().end_object();
   out << '\n';
