@@ -28,6 +28,9 @@ assert r["method"] == "j-ftf" and r["frames"] == 4 and r["keyframes"] == 4, r
 pairs = [k["pair"] for k in r["keyframe_records"][1:]]
 assert all(p is not None and p["verdict"] == "converged" for p in pairs), pairs
 assert r["errors"]["relative_translation_rms_m"] < r["front_end_errors"]["relative_translation_rms_m"]
+# Whose quadrics each map is: J-ftf's for every keyframe that starts a pair, Quad IT's for the last.
+sources = [k["curvature"] for k in r["keyframe_records"]]
+assert sources == ["j-ftf"] * 3 + ["quad-it"], sources
 PY
 fi
 expect 0 "icp-ftf" -- "$run" --dataset "$tmp/seq" --method icp-ftf --out "$tmp/icp"

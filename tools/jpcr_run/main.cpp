@@ -50,8 +50,10 @@ int run_main(int argc, char** argv) {
       "baseline over the same sliding windows as j-full, solved with Ceres; section icp_bundle\n"
       "of --params). Writes OUT/trajectory.txt (TUM, refined),\n"
       "OUT/front_end.txt (ICP-ftf), OUT/keyframes.txt, OUT/curvature/<stamp>.npy and\n"
-      "OUT/curvature_png/<stamp>.png per keyframe (J-ftf/J-full quadrics), OUT/report.json,\n"
-      "OUT/verdicts.txt (per frame: front-end and back-end verdicts, trusted yes/no).");
+      "OUT/curvature_png/<stamp>.png per keyframe, OUT/report.json, and OUT/verdicts.txt (per\n"
+      "frame: front-end and back-end verdicts, trusted yes/no). A keyframe's map comes from\n"
+      "the quadrics of its J-ftf pair or, for the first keyframe of a J-full window, of\n"
+      "J-full; elsewhere it is Quad IT's. report.json keyframe_records[].curvature says whose.");
   args.required("dataset", "TUM directory (jpcr_synth writes one) or MRPT .rawlog")
       .option("config", "camera YAML (default: the dataset's camera.yaml or rawlog intrinsics)")
       .option("method",
