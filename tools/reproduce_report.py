@@ -375,6 +375,28 @@ def main():
                 for m in CURVATURE_COLUMNS) + f" | {fmt(zero, '.3f')} | {yn('interior')} | "
               f"{yn('all')} |")
     w("")
+    w("J-ftf refines every keyframe but the last, so it has more frames of its own. On those, "
+      "interior pixels (the single-frame fits and J-ftf; J-full is left out, as it refined only "
+      "the first of them):\n")
+    w("| scene | noise | frames | Quad LS | Quad IT | J-ftf | order J-ftf < Quad IT < Quad LS |")
+    w("|---|---|---|---|---|---|---|")
+    ftf_holds = ftf_cells = 0
+    for s in SCENES:
+        for k in NOISES:
+            cell = os.path.join(a.runs, s, f"range{k}")
+            frames = own_curvature_stamps(os.path.join(cell, "j-ftf"), "j-ftf")
+            c = curvature_errors(cell, a.bin, frames, "pattern", "jftf_frames_interior")
+            three = ["quad_ls", "quad_it", "j-ftf"]
+            holds = None
+            if all(m in c for m in three):
+                ftf_cells += 1
+                holds = c["j-ftf"]["rms"] < c["quad_it"]["rms"] < c["quad_ls"]["rms"]
+                ftf_holds += holds
+            n = c["j-ftf"]["frames"] if "j-ftf" in c else 0
+            w(f"| {s} | {k} % | {n} | " + " | ".join(
+                fmt(c[m]["rms"] if m in c else None, ".3f") for m in three) +
+              f" | {'yes' if holds else ('no' if holds is not None else '–')} |")
+    w("")
     fig, axes = plt.subplots(2, len(SCENES), figsize=(4.2 * len(SCENES), 6.4), squeeze=False)
     for row, (title, rms_of) in enumerate([
             ("all compared frames and pixels", lambda s, k, m: curv[s, k].get(m, {}).get("rms")),
@@ -486,6 +508,8 @@ def main():
       f"{cells} cells on all compared frames and pixels (J-full's non-reference keyframes carry "
       f"Quad IT's maps); on J-full's own keyframes in {own_holds['all']} of {own_cells} over all "
       f"pixels and in {own_holds['interior']} of {own_cells} over interior pixels.")
+    w(f"- **J-ftf < Quad IT < Quad LS** on J-ftf's own keyframes, interior pixels: {ftf_holds} of "
+      f"{ftf_cells} cells.")
     w("")
     w("## Commands\n")
     w("```sh\n" + a.command + "\n```\n")
