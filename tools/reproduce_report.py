@@ -154,16 +154,6 @@ def curvature_errors(cell, bin_dir, only=None, support="0", tag="all"):
     return out
 
 
-def pattern_span(size):
-    """The default fit pattern's reach in pixels at `size` (WxH), as NeighbourhoodPattern::scaled
-    gives it: stride s' = max(1, round(3 f)), radius r' = max(1, round(18 f / s')), f = W / 640;
-    reach = the largest i with i² < r'² + 5."""
-    f = int(size.split("x")[0]) / 640.0
-    st = max(1, int(np.floor(3 * f + 0.5)))
-    r = max(1, int(np.floor(18 * f / st + 0.5)))
-    return int(np.floor(np.sqrt(r * r + 4.999))) * st
-
-
 def zero_rms(cell, frames, support):
     """RMS of the ground-truth κ over the interior pixels of `frames`: the error of κ = 0."""
     d = os.path.join(cell, "sequence", "curvature")
@@ -333,26 +323,28 @@ def main():
                 f"{fmt(v, '.3f')} ({fmt(cv, '.0%')})" for v, cv in zip(vals, cover)) +
               f" | {'yes' if holds else ('no' if holds is not None else '–')} |")
     w("")
-    w("J-full refines the quadrics of one keyframe per window, the window's first; its map of "
-      "every other keyframe is Quad IT's (report.json `keyframe_records[].curvature` says whose "
-      "each map is), so the table above gives J-full Quad IT's numbers on those frames. The table "
-      "below compares every method on J-full's own keyframes only, and over two pixel sets: all "
-      "of them, and the interior ones, whose whole fit pattern (±" + str(pattern_span(a.size)) +
-      " px, `jpcr_eval curvature --support pattern`) has ground truth, i.e. sees no crease, rim "
-      "or silhouette. Near those edges every patch method fits a surface that is not there. "
-      "Values are interior RMS (1/m) with the coverage of the interior pixels; 'zero' is the "
-      "RMS of the ground truth itself there, the error of answering κ = 0: a method above it "
-      "tells, on average, nothing about the curvature at that noise.\n")
     own = {}
     for s in SCENES:
         for k in NOISES:
             cell = os.path.join(a.runs, s, f"range{k}")
             frames = (own_curvature_stamps(os.path.join(cell, "j-full"), "j-full") &
                       own_curvature_stamps(os.path.join(cell, "j-ftf"), "j-ftf"))
-            own[s, k] = (len(frames),
-                         curvature_errors(cell, a.bin, frames, "0", "jfull_frames"),
-                         curvature_errors(cell, a.bin, frames, "pattern", "jfull_frames_interior"),
-                         zero_rms(cell, frames, pattern_span(a.size)))
+            interior = curvature_errors(cell, a.bin, frames, "pattern", "jfull_frames_interior")
+            # jpcr_eval resolves "pattern" to the fit pattern's span at the maps' width.
+            span = next((e["support_radius_px"] for e in interior.values()), None)
+            own[s, k] = (len(frames), curvature_errors(cell, a.bin, frames, "0", "jfull_frames"),
+                         interior, zero_rms(cell, frames, span) if span else None)
+    spans = {e["support_radius_px"] for c in own.values() for e in c[2].values()}
+    w("J-full refines the quadrics of one keyframe per window, the window's first; its map of "
+      "every other keyframe is Quad IT's (report.json `keyframe_records[].curvature` says whose "
+      "each map is), so the table above gives J-full Quad IT's numbers on those frames. The table "
+      "below compares every method on J-full's own keyframes only, and over two pixel sets: all "
+      "of them, and the interior ones, whose whole fit pattern (±" +
+      "/".join(str(x) for x in sorted(spans)) + " px, `jpcr_eval curvature --support "
+      "pattern`) has ground truth, i.e. sees no crease, rim or silhouette. Near those edges every patch method fits a surface that is not there. "
+      "Values are interior RMS (1/m) with the coverage of the interior pixels; 'zero' is the "
+      "RMS of the ground truth itself there, the error of answering κ = 0: a method above it "
+      "tells, on average, nothing about the curvature at that noise.\n")
     w("| scene | noise | frames | " + " | ".join(LABEL[m] for m in CURVATURE_COLUMNS) +
       " | zero | order, interior | order, all pixels |")
     w("|" + "---|" * (len(CURVATURE_COLUMNS) + 6))

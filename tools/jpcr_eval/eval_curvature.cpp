@@ -88,6 +88,8 @@ int run_curvature(int argc, char** argv) {
       .epilog("example:\n  jpcr_eval curvature --gt seq --est seq_it --json");
   return cli::run_program("jpcr_eval curvature", [&] {
     if (!args.parse(argc, argv)) return 0;
+    const std::string support = args.get("support");
+    if (support != "pattern") support_radius(support, 0);  // a bad value fails before any read
     const std::set<std::string> gt = curvature_stamps(args.get("gt"));
     const std::set<std::string> est = curvature_stamps(args.get("est"));
     std::optional<CurvatureErrorAccumulator> acc;
@@ -95,7 +97,7 @@ int run_curvature(int argc, char** argv) {
       if (!gt.count(stamp)) continue;
       const std::string name = "curvature/" + stamp + ".npy";
       const CurvatureImage truth = read_curvature_npy((fs::path(args.get("gt")) / name).string());
-      if (!acc) acc.emplace(support_radius(args.get("support"), truth.width()));
+      if (!acc) acc.emplace(support_radius(support, truth.width()));
       acc->add(truth, read_curvature_npy((fs::path(args.get("est")) / name).string()));
     }
     const CurvatureErrors e = acc ? acc->result() : CurvatureErrors{};
