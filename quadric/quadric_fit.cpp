@@ -3,131 +3,191 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <cstdlib>
+#include <limits>
 #include <stdexcept>
+#include <vector>
 
 #include "jpcr/quadric/error.hpp"
-#include "jpcr/quadric/sample_columns.hpp"
+#include "jpcr/quadric/pixel_lane_steps.hpp"
+#include "jpcr/quadric/pixel_lane_sums.hpp"
+#include "jpcr/quadric/simd_clones.hpp"
 
 namespace jpcr {
 
 namespace {
 
-// Quad IT at one pixel, the CPU way: the neighbourhood is gathered once into contiguous arrays
-// (centred on p̄), then each Gauss-Newton iteration linearises all samples in one SIMD loop that
-// writes √w (J, r) as columns, and the normal equations are their column products
-// (sample_columns.hpp). Same math, parameters and stopping rule as fit_quadric_pixel
-// (quadric_fit_kernel.hpp), which the CUDA kernel runs; tests compare the two.
-class GatheredFit {
+// The vertex map as three float planes (x, y, z) with a NaN margin: `margin` on the left, top
+// and bottom, margin + kPixelLanes on the right, so that every sample of every pixel, and the
+// lanes of a last group that run past the image, read inside the planes. A sample in the margin
+// has no depth and is skipped: the 2-D bounds check of method.md §2.
+class VertexPlanes {
  public:
-  GatheredFit(const NeighbourhoodPattern& pattern, int width)
-      : capacity_((static_cast<int>(pattern.size()) + kLanes - 1) / kLanes * kLanes),
-        buffer_(static_cast<std::size_t>(capacity_) * (kArrays + kQuadricColumns)) {
-    for (const PixelOffset& o : pattern.offsets) {
-      reach_ = std::max({reach_, std::abs(o.du), std::abs(o.dv)});
-      linear_.push_back(static_cast<std::ptrdiff_t>(o.dv) * width + o.du);
+  VertexPlanes(const VertexMap& vertices, int margin)
+      : margin_(margin), stride_(vertices.width() + 2 * margin + kPixelLanes) {
+    const std::size_t size = static_cast<std::size_t>(stride_) * (vertices.height() + 2 * margin);
+    for (std::vector<float>& plane : planes_)
+      plane.assign(size, std::numeric_limits<float>::quiet_NaN());
+    for (int v = 0; v < vertices.height(); ++v) {
+      for (int u = 0; u < vertices.width(); ++u) {
+        const std::size_t i = index(u, v);
+        for (int axis = 0; axis < 3; ++axis)
+          planes_[axis][i] = vertices(u, v)(axis);
+      }
     }
   }
 
-  QuadricStatus run(const VertexMap& vertices, const NeighbourhoodPattern& pattern, int u, int v,
-                    const Eigen::Vector3f& normal, const QuadricFitParams& p, Quadricd& out) {
-    const Eigen::Vector3f& centre = vertices(u, v);
-    if (!is_finite_value(centre.z())) return QuadricStatus::kNoCentre;
-    if (!is_finite_value(normal.z())) return QuadricStatus::kNoNormal;
-    const int n = gather(vertices, pattern, u, v, centre);
-    if (n < p.min_samples) return QuadricStatus::kTooFewSamples;
-    const GatheredSamples<float> samples{array(0), array(1), array(2),
-                                         array(3), array(4), (n + kLanes - 1) / kLanes * kLanes};
-    // The model in centred coordinates (p̄ = 0), so sample coordinates stay small in float.
-    Quadricd q;
-    q.R = local_frame<double>(normal.cast<double>().normalized());
-    const SampleGate<double> limits = SampleGate<double>::at(p, centre.cast<double>());
-    const float gate = static_cast<float>(limits.gate), n0 = static_cast<float>(limits.n0);
-    Quadricd previous = q;
-    double previous_cost = INFINITY;
-    for (int it = 0; it <= p.iterations; ++it) {
-      const QuadricScalars<float> qs = QuadricScalars<float>::from(q.cast<float>());
-      if (it == p.iterations) {  // one pass more than steps: it checks the last one
-        const SampleCosts c = sample_costs(qs, samples, gate, n0);
-        if (c.inliers / std::max(1, c.count) > previous_cost) q = previous;
-        break;
+  int stride() const { return stride_; }
+  const float* at(int axis, int u, int v) const { return planes_[axis].data() + index(u, v); }
+
+ private:
+  std::size_t index(int u, int v) const {
+    return static_cast<std::size_t>(v + margin_) * stride_ + (u + margin_);
+  }
+
+  int margin_, stride_;
+  std::vector<float> planes_[3];
+};
+
+// Quad IT for kPixelLanes horizontally adjacent pixels at once, the CPU way: each Gauss-Newton
+// pass sums every pixel's normal equations in its own SIMD lane (pixel_lane_sums), then every
+// pixel takes its step, also lane by lane (pixel_lane_steps.hpp). Same math, parameters and
+// stopping rule as fit_quadric_pixel (quadric_fit_kernel.hpp), which the CUDA kernel runs;
+// tests compare the two.
+class PixelGroupFit {
+ public:
+  PixelGroupFit(const VertexMap& vertices, const NormalMap& normals, const VertexPlanes& planes,
+                const std::vector<std::int32_t>& offsets, const QuadricFitParams& p)
+      : vertices_(vertices), normals_(normals), planes_(planes), offsets_(offsets), p_(p) {}
+
+  // Fits the pixels u0 … u0 + kPixelLanes − 1 of row v (those inside the image) into map.
+  void run(int u0, int v, QuadricMap& map) {
+    const int lanes = std::min(kPixelLanes, vertices_.width() - u0);
+    for (int l = 0; l < kPixelLanes; ++l)
+      start(l, l < lanes ? u0 + l : -1, v);
+    for (int it = 0; it <= p_.iterations; ++it) {
+      const bool last = it == p_.iterations;  // one pass more than steps: it checks the last one
+      to_float();
+      pixel_lane_sums(in_, planes_.at(0, u0, v), planes_.at(1, u0, v), planes_.at(2, u0, v),
+                      offsets_.data(), static_cast<int>(offsets_.size()), !last, sums_);
+      if (!last) pixel_lane_steps(sums_, p_.damping, delta_, ok_);
+      for (int l = 0; l < kPixelLanes; ++l)
+        decide(l, last);
+      // Undone lanes return to their previous quadric; stepping lanes keep theirs as previous.
+      for (int i = 0; i < LaneQuadrics::kRows; ++i) {
+        for (int l = 0; l < kPixelLanes; ++l) {
+          if (undo_[l]) q_.row[i][l] = previous_.row[i][l];
+          if (take_[l]) previous_.row[i][l] = q_.row[i][l];
+        }
       }
-      const SampleCosts c = fill_sample_columns<float, kQuadricColumns>(qs, samples, gate, n0,
-                                                                        capacity_, array(kArrays));
-      const double cost = c.inliers / std::max(1, c.count);  // mean Σ w r² over the inliers
-      if (cost > previous_cost) {  // the last step made the fit worse: undo it and stop
-        q = previous;
-        break;
+      if (last) break;
+      pixel_lane_updates(q_, delta_, take_, p_, converged_);
+      bool any = false;
+      for (int l = 0; l < kPixelLanes; ++l) {
+        active_[l] = take_[l] && !converged_[l];
+        any |= active_[l];
       }
-      if (c.count < p.min_samples) return QuadricStatus::kTooFewSamples;
-      double Y[100];
-      column_products(array(kArrays), samples.n, capacity_, kQuadricColumns, Y);
-      NormalEquations6<double> ne;  // Σ w J Jᵀ and Σ w J r (sample_columns.hpp)
-      for (int i = 0; i < 6; ++i) {
-        for (int j = 0; j < 6; ++j)
-          ne.H(i, j) = kGammaSign[i] * kGammaSign[j] * Y[kGammaColumn[i] * 10 + kGammaColumn[j]];
-        ne.g(i) = kGammaSign[i] * Y[kGammaColumn[i] * 10 + kColR];
-      }
-      previous = q;
-      previous_cost = cost;
-      Eigen::Matrix<double, 6, 1> delta;
-      if (!solve_damped_step(ne, p.damping, delta)) return QuadricStatus::kSingular;
-      apply_quadric_update(q, QuadricVector<double>(delta));
-      if (step_converged(delta, p)) break;
+      if (!any) break;
     }
-    q.center = centre.cast<double>();
-    out = q;
-    return QuadricStatus::kValid;
+    for (int l = 0; l < lanes; ++l) {
+      if (status_[l] == QuadricStatus::kValid)
+        map.set(u0 + l, v, lane_quadric(l));
+      else
+        map.set_invalid(u0 + l, v, status_[l]);
+    }
   }
 
  private:
-  static constexpr int kArrays = 5;  // dx dy dz d² and the mask m (0 for padding), then columns
-  static constexpr int kLanes = 8;   // samples per SIMD block
-
-  float* array(int i) { return buffer_.data() + static_cast<std::size_t>(i) * capacity_; }
-
-  // Gathers the valid samples as d = X − p̄; pads to a whole block with masked-out samples.
-  int gather(const VertexMap& vertices, const NeighbourhoodPattern& pattern, int u, int v,
-             const Eigen::Vector3f& centre) {
-    float *dx = array(0), *dy = array(1), *dz = array(2), *d2 = array(3), *m = array(4);
-    int n = 0;
-    if (u >= reach_ && v >= reach_ && u + reach_ < vertices.width() &&
-        v + reach_ < vertices.height()) {
-      // The whole pattern is in the image: no bounds checks, and a branch-free compaction (each
-      // sample is written, the count advances only past finite ones).
-      const Eigen::Vector3f* row = &vertices(u, v);
-      for (const std::ptrdiff_t offset : linear_) {
-        const Eigen::Vector3f d = row[offset] - centre;
-        dx[n] = d.x();
-        dy[n] = d.y();
-        dz[n] = d.z();
-        n += is_finite_value(d.z()) ? 1 : 0;
-      }
-    } else {
-      for (const PixelOffset& o : pattern.offsets) {
-        const int su = u + o.du, sv = v + o.dv;
-        if (!vertices.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
-        const Eigen::Vector3f d = vertices(su, sv) - centre;
-        if (!is_finite_value(d.z())) continue;
-        dx[n] = d.x();
-        dy[n] = d.y();
-        dz[n] = d.z();
-        ++n;
+  // Lane l starts at pixel (u, v) (u < 0: no pixel) from the plane of its initial normal.
+  void start(int l, int u, int v) {
+    active_[l] = false;
+    previous_cost_[l] = INFINITY;
+    Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+    Eigen::Vector3f centre = Eigen::Vector3f::Zero();
+    status_[l] = QuadricStatus::kNoCentre;
+    if (u >= 0 && is_finite_value(vertices_(u, v).z())) {
+      centre = vertices_(u, v);
+      const Eigen::Vector3f& normal = normals_(u, v);
+      status_[l] = is_finite_value(normal.z()) ? QuadricStatus::kValid : QuadricStatus::kNoNormal;
+      if (status_[l] == QuadricStatus::kValid) {
+        R = local_frame<double>(normal.cast<double>().normalized());
+        active_[l] = true;
       }
     }
-    for (int k = 0; k < n; ++k) {
-      d2[k] = dx[k] * dx[k] + dy[k] * dy[k] + dz[k] * dz[k];
-      m[k] = 1.0f;
-    }
-    for (int k = n; k % kLanes != 0; ++k)
-      dx[k] = dy[k] = dz[k] = d2[k] = m[k] = 0.0f;
-    return n;
+    for (int i = 0; i < 9; ++i)
+      q_.row[i][l] = R(i / 3, i % 3);
+    for (int i = LaneQuadrics::kTz; i < LaneQuadrics::kRows; ++i)
+      q_.row[i][l] = 0.0;
+    const SampleGate<double> limits = SampleGate<double>::at(p_, centre.cast<double>());
+    for (int axis = 0; axis < 3; ++axis)
+      in_.centre[axis][l] = centre(axis);
+    in_.gate[l] = static_cast<float>(limits.gate);
+    in_.n0[l] = static_cast<float>(limits.n0);
   }
 
-  int capacity_ = 0;
-  std::vector<float> buffer_;
-  int reach_ = 0;                       // max |du|, |dv| of the pattern
-  std::vector<std::ptrdiff_t> linear_;  // dv · width + du per offset
+  // The lanes' quadrics as the float inputs of pixel_lane_sums.
+  void to_float() {
+    for (int l = 0; l < kPixelLanes; ++l) {
+      for (int i = 0; i < 9; ++i)
+        in_.R[i][l] = static_cast<float>(q_.row[i][l]);
+      in_.t_z[l] = static_cast<float>(q_.row[LaneQuadrics::kTz][l]);
+      in_.a[l] = static_cast<float>(q_.row[LaneQuadrics::kA][l]);
+      in_.b[l] = static_cast<float>(q_.row[LaneQuadrics::kB][l]);
+      in_.c[l] = static_cast<float>(q_.row[LaneQuadrics::kC][l]);
+    }
+  }
+
+  // Lane l after a pass: undo_ where the last step raised the mean weighted cost, take_ where
+  // it takes another step; every other active lane stops here (or is invalid).
+  void decide(int l, bool last) {
+    undo_[l] = take_[l] = false;
+    if (!active_[l]) return;
+    active_[l] = false;
+    const int count = static_cast<int>(sums_.count[l]);
+    const double cost = sums_.inliers[l] / std::max(1, count);  // mean Σ w r² over the inliers
+    if (cost > previous_cost_[l]) {  // the last step made the fit worse: undo it and stop
+      undo_[l] = true;
+      return;
+    }
+    if (last) return;
+    if (count < p_.min_samples) {
+      status_[l] = QuadricStatus::kTooFewSamples;
+      return;
+    }
+    if (!ok_[l]) {
+      status_[l] = QuadricStatus::kSingular;
+      return;
+    }
+    previous_cost_[l] = cost;
+    take_[l] = true;
+  }
+
+  Quadric lane_quadric(int l) const {
+    Quadric q;
+    for (int i = 0; i < 9; ++i)
+      q.R(i / 3, i % 3) = static_cast<float>(q_.row[i][l]);
+    q.center = Eigen::Vector3f(in_.centre[0][l], in_.centre[1][l], in_.centre[2][l]);
+    q.t_z = static_cast<float>(q_.row[LaneQuadrics::kTz][l]);
+    q.a = static_cast<float>(q_.row[LaneQuadrics::kA][l]);
+    q.b = static_cast<float>(q_.row[LaneQuadrics::kB][l]);
+    q.c = static_cast<float>(q_.row[LaneQuadrics::kC][l]);
+    return q;
+  }
+
+  const VertexMap& vertices_;
+  const NormalMap& normals_;
+  const VertexPlanes& planes_;
+  const std::vector<std::int32_t>& offsets_;
+  const QuadricFitParams& p_;
+  PixelLaneQuadrics in_{};
+  PixelLaneSums sums_{};
+  LaneQuadrics q_{}, previous_{};
+  double previous_cost_[kPixelLanes];
+  double delta_[6][kPixelLanes];  // each lane's step (pixel_lane_steps)
+  QuadricStatus status_[kPixelLanes];
+  bool active_[kPixelLanes], ok_[kPixelLanes], undo_[kPixelLanes], take_[kPixelLanes],
+      converged_[kPixelLanes];
 };
 
 }  // namespace
@@ -168,23 +228,28 @@ QuadricFit::QuadricFit(const QuadricParams& params) : params_(params) {
 QuadricMap QuadricFit::estimate(const VertexMap& vertices, const NormalMap& normals) const {
   if (normals.width() != vertices.width() || normals.height() != vertices.height())
     throw std::invalid_argument("QuadricFit: normal map and vertex map differ in size");
-  const NeighbourhoodPattern pattern = params_.pattern.for_width(vertices.width());
+  // The offsets that can land inside the image (the others fail the bounds check at every
+  // pixel), so that the planes' margin is at most the image's size.
+  std::vector<PixelOffset> inside;
+  int reach = 0;
+  for (const PixelOffset& o : params_.pattern.for_width(vertices.width()).offsets) {
+    if (std::abs(o.du) >= vertices.width() || std::abs(o.dv) >= vertices.height()) continue;
+    inside.push_back(o);
+    reach = std::max({reach, std::abs(o.du), std::abs(o.dv)});
+  }
+  const VertexPlanes planes(vertices, reach);
+  std::vector<std::int32_t> offsets;
+  for (const PixelOffset& o : inside)
+    offsets.push_back(o.dv * planes.stride() + o.du);
   QuadricMap map(vertices.width(), vertices.height());
+  const int groups = (vertices.width() + kPixelLanes - 1) / kPixelLanes;
 #pragma omp parallel
   {
-    GatheredFit fit(pattern, vertices.width());
+    PixelGroupFit fit(vertices, normals, planes, offsets, params_.fit);
 #pragma omp for schedule(dynamic, 4)
-    for (int v = 0; v < vertices.height(); ++v) {
-      for (int u = 0; u < vertices.width(); ++u) {
-        Quadricd q;
-        const QuadricStatus status =
-            fit.run(vertices, pattern, u, v, normals(u, v), params_.fit, q);
-        if (status == QuadricStatus::kValid)
-          map.set(u, v, q.cast<float>());
-        else
-          map.set_invalid(u, v, status);
-      }
-    }
+    for (int v = 0; v < vertices.height(); ++v)
+      for (int g = 0; g < groups; ++g)
+        fit.run(g * kPixelLanes, v, map);
   }
   return map;
 }

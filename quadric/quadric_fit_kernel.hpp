@@ -1,6 +1,7 @@
 // Quad IT for one pixel (method.md §3): the weighted Gauss-Newton fit of the quadric γ_p to the
-// vertices of p's neighbourhood. JPCR_HD and allocation-free, so the dense CPU fit
-// (quadric_fit.cpp) and the CUDA kernel (cuda/) run exactly this code per pixel.
+// vertices of p's neighbourhood. JPCR_HD and allocation-free: the CUDA kernel (cuda/) runs
+// exactly this code per pixel, and the dense CPU fit (quadric_fit.cpp) the same math with 16
+// pixels in SIMD lanes (pixel_lane_sums.hpp, pixel_lane_steps.hpp); tests compare the two.
 #pragma once
 
 #include <Eigen/Core>

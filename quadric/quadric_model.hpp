@@ -15,7 +15,8 @@
 // rotation about n is a gauge freedom absorbed by b (method.md §3; the paper's "t_x" is t_z).
 //
 // Every function here is JPCR_HD (host + device under nvcc) and allocation-free, so the CPU
-// reference (quadric_fit.cpp, backend/) and the CUDA kernels (cuda/) call exactly the same code.
+// reference (backend/, the tests) and the CUDA kernels (cuda/) call exactly the same code; the
+// dense CPU Quad IT writes the same arithmetic on SIMD lanes (pixel_lane_sums.inc).
 #pragma once
 
 #include <cmath>

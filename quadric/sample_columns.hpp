@@ -1,7 +1,8 @@
-// The per-sample SIMD loops of the CPU fits: Quad IT (quadric_fit.cpp) and the joint systems'
-// gathered per-frame sums (backend/gathered_frame_terms.cpp). Both linearise the samples of one
-// neighbourhood, gathered into contiguous lane arrays d = X − p̄ (d², and a mask 0 for padding),
-// and read their normal equations off one small matrix of column products.
+// The per-sample SIMD loops of the joint systems' gathered per-frame sums
+// (backend/gathered_frame_terms.cpp; Quad IT has its own, pixel_lane_sums.hpp, with the same
+// columns). They linearise the samples of one neighbourhood, gathered into contiguous lane
+// arrays d = X − p̄ (d², and a mask 0 for padding), and read their normal equations off one
+// small matrix of column products.
 //
 // With v = R d, g = (g_x, g_y, −1) and m = v_x g_y − v_y g_x (quadric_model.hpp), the columns
 // are √w times y = (1, J₀, J₁, J₃, J₄, J₅), r, then the pose-only entries (g_x, g_y, m); w is the

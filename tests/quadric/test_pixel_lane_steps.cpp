@@ -1,0 +1,118 @@
+// The lane-parallel halves of a Quad IT iteration (pixel_lane_steps.hpp) against the per-pixel
+// functions the CUDA kernel runs: pixel_lane_steps against solve_damped_step on fresh random
+// normal equations (plus a singular and a NaN lane), pixel_lane_updates against
+// apply_quadric_update and step_converged, small, large and zero rotations, lanes left alone.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <random>
+
+#include "jpcr/quadric/pixel_lane_steps.hpp"
+
+namespace jpcr {
+namespace {
+
+unsigned tri(unsigned a, unsigned b) {
+  return a >= b ? a * (a + 1) / 2 + b : b * (b + 1) / 2 + a;
+}
+
+TEST(PixelLaneSteps, EqualSolveDampedStepAndFlagSingularLanes) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> n(0.0, 1.0);
+  PixelLaneSums sums{};
+  NormalEquations6<double> ne[kPixelLanes];
+  for (int l = 0; l < kPixelLanes; ++l) {
+    // Y = Σ (y, r)(y, r)ᵀ of 40 random samples with column scales like a 3 cm patch.
+    const double scale[kQuadricColumns] = {1.0, 0.03, 0.03, 5e-4, 1e-3, 5e-4, 2e-3};
+    double Y[kQuadricColumns][kQuadricColumns] = {};
+    for (int k = 0; k < 40; ++k) {
+      double y[kQuadricColumns];
+      for (int a = 0; a < kQuadricColumns; ++a)
+        y[a] = a == 0 ? 1.0 : scale[a] * n(rng);
+      for (int a = 0; a < kQuadricColumns; ++a)
+        for (int b = 0; b < kQuadricColumns; ++b)
+          Y[a][b] += y[a] * y[b];
+    }
+    if (l == 3)  // J₃ ≡ 0 (no sample off the e_y axis): a zero pivot, damping or not
+      for (int a = 0; a < kQuadricColumns; ++a)
+        Y[kColJ3][a] = Y[a][kColJ3] = 0.0;
+    if (l == 5) Y[kColJ1][kColJ0] = Y[kColJ0][kColJ1] = std::numeric_limits<double>::quiet_NaN();
+    for (int a = 0; a < kQuadricColumns; ++a)
+      for (int b = 0; b <= a; ++b)
+        sums.products[tri(a, b)][l] = static_cast<float>(Y[a][b]);
+    for (int i = 0; i < 6; ++i) {  // the same system from the float sums, as the CPU fit reads it
+      for (int j = 0; j < 6; ++j)
+        ne[l].H(i, j) = kGammaSign[i] * kGammaSign[j] *
+                        double(sums.products[tri(kGammaColumn[i], kGammaColumn[j])][l]);
+      ne[l].g(i) = kGammaSign[i] * double(sums.products[tri(kGammaColumn[i], kColR)][l]);
+    }
+  }
+  double delta[6][kPixelLanes];
+  bool ok[kPixelLanes];
+  pixel_lane_steps(sums, 0.01, delta, ok);
+  for (int l = 0; l < kPixelLanes; ++l) {
+    Eigen::Matrix<double, 6, 1> expected;
+    const bool solved = solve_damped_step(ne[l], 0.01, expected);
+    EXPECT_EQ(ok[l], solved) << "lane " << l;
+    EXPECT_EQ(ok[l], l != 3 && l != 5) << "lane " << l;
+    if (!solved) continue;
+    for (int i = 0; i < 6; ++i)  // two factorisations of a system with κ ≈ 1e8 in double
+      EXPECT_NEAR(delta[i][l], expected(i), 1e-7 * expected.cwiseAbs().maxCoeff())
+          << "lane " << l << " Δ" << i;
+  }
+}
+
+TEST(PixelLaneSteps, UpdatesEqualApplyQuadricUpdateAndStepConverged) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  QuadricFitParams p;
+  LaneQuadrics lanes;
+  Quadricd expected[kPixelLanes];
+  double delta[6][kPixelLanes];
+  bool take[kPixelLanes], converged[kPixelLanes];
+  for (int l = 0; l < kPixelLanes; ++l) {
+    Quadricd& q = expected[l];
+    q.R = local_frame<double>(Eigen::Vector3d(u(rng), u(rng), -2.0).normalized());
+    q.t_z = 0.01 * u(rng), q.a = u(rng), q.b = u(rng), q.c = u(rng);
+    for (int i = 0; i < 9; ++i)
+      lanes.row[i][l] = q.R(i / 3, i % 3);
+    lanes.row[LaneQuadrics::kTz][l] = q.t_z;
+    lanes.row[LaneQuadrics::kA][l] = q.a;
+    lanes.row[LaneQuadrics::kB][l] = q.b;
+    lanes.row[LaneQuadrics::kC][l] = q.c;
+    // Rotations from 0 (lane 0) and below the solver's tolerances (lane 1) through 0.01 to
+    // 1.2 rad (beyond the series, lanes 12–15).
+    const double angle = l == 0 ? 0.0 : l == 1 ? 1e-7 : l < 12 ? 0.01 * l : 0.3 * (l - 11);
+    const double phase = u(rng) * M_PI;
+    delta[0][l] = angle * std::cos(phase);
+    delta[1][l] = angle * std::sin(phase);
+    for (int i = 2; i < 6; ++i)
+      delta[i][l] = l <= 1 ? 1e-9 * u(rng) : 0.1 * u(rng);
+    take[l] = l % 5 != 4;
+    if (take[l]) {
+      Eigen::Matrix<double, 6, 1> d;
+      for (int i = 0; i < 6; ++i)
+        d(i) = delta[i][l];
+      apply_quadric_update(q, QuadricVector<double>(d));
+    }
+  }
+  pixel_lane_updates(lanes, delta, take, p, converged);
+  for (int l = 0; l < kPixelLanes; ++l) {
+    Eigen::Matrix<double, 6, 1> d;
+    for (int i = 0; i < 6; ++i)
+      d(i) = delta[i][l];
+    EXPECT_EQ(converged[l], step_converged(d, p)) << "lane " << l;
+    for (int i = 0; i < 9; ++i)
+      EXPECT_NEAR(lanes.row[i][l], expected[l].R(i / 3, i % 3), 1e-15) << "lane " << l;
+    EXPECT_EQ(lanes.row[LaneQuadrics::kTz][l], expected[l].t_z);
+    EXPECT_EQ(lanes.row[LaneQuadrics::kA][l], expected[l].a);
+    EXPECT_EQ(lanes.row[LaneQuadrics::kB][l], expected[l].b);
+    EXPECT_EQ(lanes.row[LaneQuadrics::kC][l], expected[l].c);
+  }
+  EXPECT_TRUE(converged[1]);  // the tiny step
+  EXPECT_FALSE(converged[2]);
+}
+
+}  // namespace
+}  // namespace jpcr
