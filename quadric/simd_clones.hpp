@@ -6,6 +6,9 @@
 // target` (pixel_lane_sums.cpp), to be called only where cpu_simd_level() allows.
 #pragma once
 
+#include <cstdlib>
+#include <cstring>
+
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && !defined(__CUDACC__)
 #define JPCR_SIMD_CLONES __attribute__((target_clones("arch=x86-64-v3", "default")))
 #define JPCR_HAVE_X86_TARGETS 1
@@ -20,18 +23,24 @@ namespace jpcr {
 enum class SimdLevel { kBaseline, kAvx2, kAvx512 };
 
 /// The best level this CPU runs: kAvx512 for x86-64-v4 (AVX-512 F, BW, CD, DQ, VL), kAvx2 for
-/// x86-64-v3 (AVX2, FMA, BMI2), else kBaseline; read once.
+/// x86-64-v3 (AVX2, FMA, BMI2), else kBaseline; capped by the environment variable JPCR_SIMD
+/// (`avx2` or `baseline`, for comparisons). Read once.
 inline SimdLevel cpu_simd_level() {
 #if JPCR_HAVE_X86_TARGETS
   static const SimdLevel level = [] {
+    SimdLevel best = SimdLevel::kBaseline;
     if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
         __builtin_cpu_supports("avx512cd") && __builtin_cpu_supports("avx512dq") &&
         __builtin_cpu_supports("avx512vl"))
-      return SimdLevel::kAvx512;
-    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
-        __builtin_cpu_supports("bmi2"))
-      return SimdLevel::kAvx2;
-    return SimdLevel::kBaseline;
+      best = SimdLevel::kAvx512;
+    else if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+             __builtin_cpu_supports("bmi2"))
+      best = SimdLevel::kAvx2;
+    const char* cap = std::getenv("JPCR_SIMD");
+    if (cap != nullptr && std::strcmp(cap, "avx2") == 0 && best > SimdLevel::kAvx2)
+      best = SimdLevel::kAvx2;
+    if (cap != nullptr && std::strcmp(cap, "baseline") == 0) best = SimdLevel::kBaseline;
+    return best;
   }();
   return level;
 #else
