@@ -1,6 +1,7 @@
 #include "jpcr/quadric/pixel_lane_sums.hpp"
 
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
 #include <stdexcept>
 
@@ -39,8 +40,28 @@ constexpr int kLanes = 4;
 
 }  // namespace
 
+SimdLevel cpu_simd_level() {
+#if JPCR_HAVE_X86_TARGETS
+  static const SimdLevel level = [] {
+    SimdLevel best = SimdLevel::kBaseline;
+    if (__builtin_cpu_supports("x86-64-v4"))
+      best = SimdLevel::kAvx512;
+    else if (__builtin_cpu_supports("x86-64-v3"))
+      best = SimdLevel::kAvx2;
+    const char* cap = std::getenv("JPCR_SIMD");
+    if (cap != nullptr && std::strcmp(cap, "avx2") == 0 && best > SimdLevel::kAvx2)
+      best = SimdLevel::kAvx2;
+    if (cap != nullptr && std::strcmp(cap, "baseline") == 0) best = SimdLevel::kBaseline;
+    return best;
+  }();
+  return level;
+#else
+  return SimdLevel::kBaseline;
+#endif
+}
+
 void pixel_lane_sums(const PixelLaneQuadrics& q, const float* x, const float* y, const float* z,
-                     const std::int32_t* offsets, int n, bool with_products, PixelLaneSums& out,
+                     const std::ptrdiff_t* offsets, int n, bool with_products, PixelLaneSums& out,
                      SimdLevel level) {
   if (level > cpu_simd_level())
     throw std::invalid_argument("pixel_lane_sums: this CPU lacks the requested SIMD level");

@@ -6,7 +6,7 @@
 // tests/quadric/test_pixel_lane_sums.cpp compares every level with a per-sample double sum.
 #pragma once
 
-#include <cstdint>
+#include <cstddef>
 
 #include "jpcr/quadric/sample_columns.hpp"
 #include "jpcr/quadric/simd_clones.hpp"
@@ -38,10 +38,11 @@ struct PixelLaneSums {
 /// The sums of one pass. x, y and z point at the first pixel's vertex in three float planes of
 /// one row stride; the pixel in lane l is l floats further on, and its sample k lies offsets[k]
 /// floats from it in each plane. Samples whose z is not finite are skipped, so planes with a
-/// NaN margin implement the 2-D bounds check (method.md §2). Products only where
+/// NaN margin implement the 2-D bounds check (method.md §2); x and y must be finite wherever z
+/// is (a NaN there would reach the lane's sums). Products only where
 /// with_products. Throws std::invalid_argument for a level above cpu_simd_level().
 void pixel_lane_sums(const PixelLaneQuadrics& q, const float* x, const float* y, const float* z,
-                     const std::int32_t* offsets, int n, bool with_products, PixelLaneSums& out,
+                     const std::ptrdiff_t* offsets, int n, bool with_products, PixelLaneSums& out,
                      SimdLevel level = cpu_simd_level());
 
 }  // namespace jpcr

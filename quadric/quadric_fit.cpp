@@ -31,9 +31,13 @@ class VertexPlanes {
       plane.assign(size, std::numeric_limits<float>::quiet_NaN());
     for (int v = 0; v < vertices.height(); ++v) {
       for (int u = 0; u < vertices.width(); ++u) {
+        // A vertex with any coordinate not finite is no sample (its residual would not be
+        // finite, and fit_quadric_pixel's gate drops it): all three NaN.
+        const Eigen::Vector3f& X = vertices(u, v);
+        if (!X.allFinite()) continue;
         const std::size_t i = index(u, v);
         for (int axis = 0; axis < 3; ++axis)
-          planes_[axis][i] = vertices(u, v)(axis);
+          planes_[axis][i] = X(axis);
       }
     }
   }
@@ -58,7 +62,7 @@ class VertexPlanes {
 class PixelGroupFit {
  public:
   PixelGroupFit(const VertexMap& vertices, const NormalMap& normals, const VertexPlanes& planes,
-                const std::vector<std::int32_t>& offsets, const QuadricFitParams& p)
+                const std::vector<std::ptrdiff_t>& offsets, const QuadricFitParams& p)
       : vertices_(vertices), normals_(normals), planes_(planes), offsets_(offsets), p_(p) {}
 
   // Fits the pixels u0 … u0 + kPixelLanes − 1 of row v (those inside the image) into map.
@@ -102,7 +106,7 @@ class PixelGroupFit {
   // Lane l starts at pixel (u, v) (u < 0: no pixel) from the plane of its initial normal.
   void start(int l, int u, int v) {
     active_[l] = false;
-    previous_cost_[l] = INFINITY;
+    previous_cost_[l] = 1e300;  // as fit_quadric_pixel
     Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
     Eigen::Vector3f centre = Eigen::Vector3f::Zero();
     status_[l] = QuadricStatus::kNoCentre;
@@ -145,7 +149,7 @@ class PixelGroupFit {
     if (!active_[l]) return;
     active_[l] = false;
     const int count = static_cast<int>(sums_.count[l]);
-    const double cost = sums_.inliers[l] / std::max(1, count);  // mean Σ w r² over the inliers
+    const double cost = double(sums_.inliers[l]) / std::max(1, count);  // mean Σ w r², inliers
     if (cost > previous_cost_[l]) {  // the last step made the fit worse: undo it and stop
       undo_[l] = true;
       return;
@@ -178,7 +182,7 @@ class PixelGroupFit {
   const VertexMap& vertices_;
   const NormalMap& normals_;
   const VertexPlanes& planes_;
-  const std::vector<std::int32_t>& offsets_;
+  const std::vector<std::ptrdiff_t>& offsets_;
   const QuadricFitParams& p_;
   PixelLaneQuadrics in_{};
   PixelLaneSums sums_{};
@@ -238,9 +242,9 @@ QuadricMap QuadricFit::estimate(const VertexMap& vertices, const NormalMap& norm
     reach = std::max({reach, std::abs(o.du), std::abs(o.dv)});
   }
   const VertexPlanes planes(vertices, reach);
-  std::vector<std::int32_t> offsets;
+  std::vector<std::ptrdiff_t> offsets;
   for (const PixelOffset& o : inside)
-    offsets.push_back(o.dv * planes.stride() + o.du);
+    offsets.push_back(static_cast<std::ptrdiff_t>(o.dv) * planes.stride() + o.du);
   QuadricMap map(vertices.width(), vertices.height());
   const int groups = (vertices.width() + kPixelLanes - 1) / kPixelLanes;
 #pragma omp parallel

@@ -82,7 +82,7 @@ TEST(PixelLaneSteps, UpdatesEqualApplyQuadricUpdateAndStepConverged) {
     lanes.row[LaneQuadrics::kB][l] = q.b;
     lanes.row[LaneQuadrics::kC][l] = q.c;
     // Rotations from 0 (lane 0) and below the solver's tolerances (lane 1) through 0.01 to
-    // 1.2 rad (beyond the series, lanes 12–15).
+    // 1.2 rad; lanes 13 and 15 (0.6, 1.2 rad) are beyond the series (lane 14 takes no step).
     const double angle = l == 0 ? 0.0 : l == 1 ? 1e-7 : l < 12 ? 0.01 * l : 0.3 * (l - 11);
     const double phase = u(rng) * M_PI;
     delta[0][l] = angle * std::cos(phase);

@@ -1,7 +1,10 @@
 // Quad IT and Quad LS on rendered frames: known curvature of spheres, cylinders and planes,
 // invariance under rigid motion, invalid pixels flagged (never 0), and Quad IT beating Quad LS
 // under the paper's range noise.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -264,66 +267,92 @@ namespace jpcr {
 namespace {
 
 // The CPU fit (pixels in SIMD lanes, float sums) and the per-pixel reference kernel that the
-// CUDA code runs (fit_quadric_pixel, here in double) implement the same iteration: on a noisy
-// frame they agree to float rounding. Returns the RMS κ difference over pixels valid in both.
-double rms_against_reference_kernel(const VertexMap& vertices, const QuadricParams& params,
-                                    int& compared, int& status_mismatch) {
+// CUDA code runs (fit_quadric_pixel, here in double) implement the same iteration, so they
+// agree to float rounding except where a keep-or-undo decision compares two costs equal to
+// float precision and goes the other way (one Gauss-Newton step apart).
+struct KernelAgreement {
+  int pixels = 0;           // valid in both
+  int status_mismatch = 0;  // a sample exactly at the gate may fall either way in float
+  double rms = 0.0;         // of κ₁, κ₂ (1/m)
+  double p99 = 0.0;         // 99th percentile of max(|Δκ₁|, |Δκ₂|)
+  int flipped = 0;          // pixels with max |Δκ| > 1e-3 1/m: decisions that went the other way
+};
+
+KernelAgreement compare_with_reference_kernel(const VertexMap& vertices,
+                                              const QuadricParams& params) {
   const NormalMap normals = estimate_normals(vertices);
   const QuadricFit fit(params);
   const QuadricMap map = fit.estimate(vertices, normals);
   const NeighbourhoodPattern pattern = fit.params().pattern.for_width(vertices.width());
   const VertexView view{vertices.data(), vertices.width(), vertices.height()};
+  KernelAgreement a;
+  std::vector<double> worst;
   double sum = 0.0;
-  compared = status_mismatch = 0;
   for (int v = 0; v < vertices.height(); ++v) {
     for (int u = 0; u < vertices.width(); ++u) {
       Quadricd q;
       const QuadricStatus s = fit_quadric_pixel<double>(
           view, pattern.offsets.data(), pattern.size(), u, v, normals(u, v), fit.params().fit, q);
       if (s != map.status(u, v)) {
-        ++status_mismatch;  // a sample exactly at the gate may fall either way in float
+        ++a.status_mismatch;
         continue;
       }
       if (s != QuadricStatus::kValid) continue;
-      const Eigen::Vector2d k = principal_curvatures(q.a, q.b, q.c);
-      sum += (k - map.curvature(u, v).cast<double>()).squaredNorm();
-      compared += 2;
+      const Eigen::Vector2d d =
+          principal_curvatures(q.a, q.b, q.c) - map.curvature(u, v).cast<double>();
+      sum += d.squaredNorm();
+      worst.push_back(d.cwiseAbs().maxCoeff());
+      a.flipped += worst.back() > 1e-3 ? 1 : 0;
     }
   }
-  return compared > 0 ? std::sqrt(sum / compared) : 0.0;
+  a.pixels = static_cast<int>(worst.size());
+  if (a.pixels == 0) return a;
+  a.rms = std::sqrt(sum / (2.0 * a.pixels));
+  std::sort(worst.begin(), worst.end());
+  a.p99 = worst[worst.size() * 99 / 100];
+  return a;
 }
 
-// Measured at 160x120: RMS 2.7e-4 1/m, no status mismatch; bound 1e-3.
+// 152 px wide: the last group of 16 pixels runs past the image. Measured with AVX-512 / AVX2
+// (SSE2): 15919 pixels, no status mismatch, p99 3.4e-6 (3.3e-6) 1/m, median 1.1e-7, 18 (24)
+// flipped, 0.11 % (0.15 %), RMS 3.3e-4 (3.7e-4) 1/m, nearly all from the flips. A slip in the
+// shared math would move the p99; bounds 3e-5, 0.5 % and 1e-3.
 TEST(QuadricFit, CpuFitEqualsTheReferenceKernel) {
-  const CameraIntrinsics camera = synthetic_camera(160, 120);
+  const CameraIntrinsics camera = synthetic_camera(152, 114);
   const SyntheticFrame f =
       render(test::room_with(Sphere{{0, 0, 1.2}, 0.3}), camera,
              test::look_from({0.1, -1.2, 1.4}, {0, 0, 1.2}), parse_noise("range:0.5"), 3);
-  int compared = 0, mismatch = 0;
-  const double rms = rms_against_reference_kernel(compute_vertex_map(f.frame.depth, camera), {},
-                                                  compared, mismatch);
-  ASSERT_GT(compared, camera.width * camera.height);
-  EXPECT_LT(mismatch, camera.width * camera.height / 1000);
-  EXPECT_LT(rms, 1e-3);
+  const KernelAgreement a =
+      compare_with_reference_kernel(compute_vertex_map(f.frame.depth, camera), {});
+  std::printf("pixels %d, status mismatch %d, p99 %.2g, flipped %d, rms %.2g 1/m\n", a.pixels,
+              a.status_mismatch, a.p99, a.flipped, a.rms);
+  ASSERT_GT(a.pixels, camera.width * camera.height / 2);
+  EXPECT_LT(a.status_mismatch, camera.width * camera.height / 1000);
+  EXPECT_LT(a.p99, 3e-5);
+  EXPECT_LT(a.flipped, a.pixels / 200);  // 0.5 %
+  EXPECT_LT(a.rms, 1e-3);
 }
 
 // A pattern that reaches far beyond a small image (radius 64 cells of 8 px, ±512 px on a
-// 48x36 frame): the samples that can never be inside are skipped as the bounds check skips
+// 50x37 frame): the samples that can never be inside are skipped as the bounds check skips
 // them, each pixel keeps the ones that are, and the result is still the kernel's.
 TEST(QuadricFit, APatternWiderThanTheImageStillEqualsTheReferenceKernel) {
-  const CameraIntrinsics camera = synthetic_camera(48, 36);
+  const CameraIntrinsics camera = synthetic_camera(50, 37);
   const SyntheticFrame f =
       render(test::room_with(Sphere{{0, 0, 1.2}, 0.3}), camera,
              test::look_from({0.1, -1.2, 1.4}, {0, 0, 1.2}), parse_noise("range:0.5"), 5);
   QuadricParams params;
   params.pattern.radius = 64;
   params.pattern.stride = 8;
-  params.pattern.reference_width = 48;  // no scaling
-  int compared = 0, mismatch = 0;
-  const double rms = rms_against_reference_kernel(compute_vertex_map(f.frame.depth, camera), params,
-                                                  compared, mismatch);
-  EXPECT_EQ(mismatch, 0);
-  EXPECT_LT(rms, 1e-3);
+  params.pattern.reference_width = 50;  // no scaling
+  const KernelAgreement a =
+      compare_with_reference_kernel(compute_vertex_map(f.frame.depth, camera), params);
+  // Patches this wide see walls and sphere at once, so few pixels keep min_samples inliers
+  // (measured: 48 of 1850, every status equal, RMS 1e-7 1/m); all statuses are compared.
+  ASSERT_GT(a.pixels, 30);
+  EXPECT_LE(a.status_mismatch, 2);  // ≤ 0.1 %, as above
+  EXPECT_EQ(a.flipped, 0);
+  EXPECT_LT(a.rms, 1e-4);
 }
 
 }  // namespace
