@@ -208,11 +208,27 @@ JPCR_HD Eigen::Matrix<Scalar, 2, 1> principal_curvatures(Scalar a, Scalar b, Sca
 }
 
 /// The first principal direction (of κ₁) in the camera frame: φ = ½ atan2(2b, a − c),
-/// d₁ = cos φ e_x + sin φ e_y; d₂ = n × d₁.
+/// d₁ = cos φ e_x + sin φ e_y; d₂ = n × d₁. Without trigonometry: with h = (a − c)/2 and
+/// ρ = √(h² + b²), cos 2φ = h/ρ and sin 2φ = b/ρ, and the half angle is taken from whichever of
+/// cos φ = √((ρ + h)/2ρ) (h ≥ 0) or |sin φ| = √((ρ − h)/2ρ) (h < 0) has no cancellation, the
+/// other from 2 sin φ cos φ = b/ρ; φ ∈ (−π/2, π/2], so cos φ ≥ 0 and sin φ has the sign of b.
+/// At an umbilic (ρ = 0) every direction is principal: d₁ = e_x.
 template <typename Scalar>
 JPCR_HD Eigen::Matrix<Scalar, 3, 1> principal_direction(const QuadricT<Scalar>& q) {
-  const Scalar phi = Scalar(0.5) * std::atan2(Scalar(2) * q.b, q.a - q.c);
-  return (std::cos(phi) * q.R.row(0) + std::sin(phi) * q.R.row(1)).transpose();
+  const Scalar h = Scalar(0.5) * (q.a - q.c), b = q.b;
+  const Scalar rho = std::sqrt(h * h + b * b);
+  Scalar c = Scalar(1), s = Scalar(0);
+  if (rho > Scalar(0)) {
+    if (h >= Scalar(0)) {
+      c = std::sqrt((rho + h) / (Scalar(2) * rho));
+      s = b / (Scalar(2) * rho * c);
+    } else {
+      s = std::sqrt((rho - h) / (Scalar(2) * rho));
+      s = b < Scalar(0) ? -s : s;
+      c = b / (Scalar(2) * rho * s);
+    }
+  }
+  return (c * q.R.row(0) + s * q.R.row(1)).transpose();
 }
 
 }  // namespace jpcr

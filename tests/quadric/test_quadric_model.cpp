@@ -95,6 +95,20 @@ TEST(QuadricModel, PrincipalCurvaturesAreEigenvaluesAndDirectionIsEigenvector) {
     EXPECT_NEAR(d1.norm(), 1.0, 1e-12);
     const Eigen::Vector2d w = local.head<2>();
     EXPECT_LT((K * w - kappa.x() * w).norm(), 1e-9 * (1 + std::abs(kappa.x())));
+    // The half-angle formulas are ½ atan2(2b, a − c) itself, sign included, for b ≠ 0.
+    const double phi = 0.5 * std::atan2(2 * q.b, q.a - q.c);
+    EXPECT_NEAR(local.x(), std::cos(phi), 1e-12);
+    EXPECT_NEAR(local.y(), std::sin(phi), 1e-12);
+  }
+  // Diagonal K (b = 0): φ = 0 for a > c, π/2 for a < c; an umbilic gives e_x.
+  for (const Eigen::Vector3d abc : {Eigen::Vector3d(2, 0, 1), Eigen::Vector3d(1, 0, 2),
+                                    Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(0, 0, 0)}) {
+    Quadricd q = random_quadric(rng);
+    q.a = abc(0), q.b = abc(1), q.c = abc(2);
+    const Eigen::Vector3d local = q.R * principal_direction(q);
+    const Eigen::Vector3d expected =
+        abc(0) < abc(2) ? Eigen::Vector3d::UnitY() : Eigen::Vector3d::UnitX();
+    EXPECT_LT((local - expected).norm(), 1e-12) << abc.transpose();
   }
 }
 
