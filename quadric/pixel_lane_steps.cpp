@@ -44,20 +44,17 @@ JPCR_SIMD_CLONES void lane_steps(const PixelLaneSums& s, double damping,
     good[l] = max_diag > 0.0;  // false for NaN too
   }
   for (int j = 0; j < 6; ++j) {
-    for (int k = 0; k < j; ++k)
+    for (int i = j; i < 6; ++i)  // column j: D_j (i = j), then D_j L_ij
+      for (int k = 0; k < j; ++k)
 #pragma omp simd
-      for (int l = 0; l < kLanes; ++l)
-        H[j][j][l] -= H[j][k][l] * H[k][j][l];
+        for (int l = 0; l < kLanes; ++l)
+          H[i][j][l] -= H[i][k][l] * H[k][j][l];
 #pragma omp simd
     for (int l = 0; l < kLanes; ++l) {
       good[l] = good[l] && H[j][j][l] > floor[l];  // also catches NaN
       inverse[j][l] = 1.0 / H[j][j][l];
     }
     for (int i = j + 1; i < 6; ++i) {
-      for (int k = 0; k < j; ++k)
-#pragma omp simd
-        for (int l = 0; l < kLanes; ++l)
-          H[i][j][l] -= H[i][k][l] * H[k][j][l];
 #pragma omp simd
       for (int l = 0; l < kLanes; ++l) {
         H[j][i][l] = H[i][j][l];

@@ -1,6 +1,7 @@
 #include "jpcr/quadric/pixel_lane_sums.hpp"
 
 #include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <stdexcept>
@@ -49,9 +50,10 @@ SimdLevel cpu_simd_level() {
     else if (__builtin_cpu_supports("x86-64-v3"))
       best = SimdLevel::kAvx2;
     const char* cap = std::getenv("JPCR_SIMD");
-    if (cap != nullptr && std::strcmp(cap, "avx2") == 0 && best > SimdLevel::kAvx2)
-      best = SimdLevel::kAvx2;
-    if (cap != nullptr && std::strcmp(cap, "baseline") == 0) best = SimdLevel::kBaseline;
+    if (cap == nullptr || *cap == '\0' || std::strcmp(cap, "avx512") == 0) return best;
+    if (std::strcmp(cap, "avx2") == 0) return best > SimdLevel::kAvx2 ? SimdLevel::kAvx2 : best;
+    if (std::strcmp(cap, "baseline") == 0) return SimdLevel::kBaseline;
+    std::fprintf(stderr, "jpcr: JPCR_SIMD=%s is not avx512, avx2 or baseline; ignored\n", cap);
     return best;
   }();
   return level;

@@ -22,7 +22,8 @@ enum class SimdLevel { kBaseline, kAvx2, kAvx512 };
 
 /// The best level this CPU runs: kAvx512 for x86-64-v4, kAvx2 for x86-64-v3, else kBaseline
 /// (kBaseline wherever JPCR_HAVE_X86_TARGETS is 0); capped by the environment variable
-/// JPCR_SIMD (`avx2` or `baseline`, for comparisons). Read once (pixel_lane_sums.cpp).
+/// JPCR_SIMD (`avx512`, `avx2` or `baseline`, for comparisons; another value is reported on
+/// stderr and ignored). Read once (pixel_lane_sums.cpp).
 SimdLevel cpu_simd_level();
 
 }  // namespace jpcr
