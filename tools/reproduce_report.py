@@ -341,7 +341,8 @@ def main():
       "below compares every method on J-full's own keyframes only, and over two pixel sets: all "
       "of them, and the interior ones, whose whole fit pattern (±" +
       "/".join(str(x) for x in sorted(spans)) + " px, `jpcr_eval curvature --support "
-      "pattern`) has ground truth, i.e. sees no crease, rim or silhouette. Near those edges every patch method fits a surface that is not there. "
+      "pattern`) has ground truth, i.e. sees no crease, rim or silhouette. Near those edges "
+      "every patch method fits a surface that is not there. "
       "Values are interior RMS (1/m) with the coverage of the interior pixels; 'zero' is the "
       "RMS of the ground truth itself there, the error of answering κ = 0: a method above it "
       "tells, on average, nothing about the curvature at that noise.\n")
