@@ -78,31 +78,44 @@ JPCR_HD Eigen::Vector3f plane_normal_from_moments(const Eigen::Vector3d& sum,
   return n;
 }
 
+/// The moments of the plane fit at (u, v): Σ d, Σ d dᵀ and the count of the window's valid
+/// vertices X within the depth jump of the centre, with d = X − centre (centred for precision).
+/// False where the centre has no vertex.
+JPCR_HD bool window_moments(const VertexView& vertices, int u, int v,
+                            const NormalEstimationParams& p, Eigen::Vector3d& sum,
+                            Eigen::Matrix3d& outer, int& count) {
+  sum.setZero();
+  outer.setZero();
+  count = 0;
+  const Eigen::Vector3f centre = vertices(u, v);
+  if (!is_finite_value(centre.z())) return false;
+  const float jump = p.max_depth_jump * centre.z();
+  for (int dv = -p.half_window; dv <= p.half_window; ++dv) {
+    for (int du = -p.half_window; du <= p.half_window; ++du) {
+      if (!vertices.in_bounds(u + du, v + dv)) continue;
+      const Eigen::Vector3f& X = vertices(u + du, v + dv);
+      if (!is_finite_value(X.z()) || fabsf(X.z() - centre.z()) > jump) continue;
+      const Eigen::Vector3d d = (X - centre).cast<double>();
+      sum += d;
+      outer += d * d.transpose();
+      ++count;
+    }
+  }
+  return true;
+}
+
 /// The plane normal at (u, v): the eigenvector of the smallest eigenvalue of the scatter matrix
 /// of the window points about their mean (closed-form 3x3 solve, computeDirect, in double).
 /// Unit, n·X < 0; all-NaN where the centre has no vertex, too few window points remain or the
 /// points are collinear.
 JPCR_HD Eigen::Vector3f plane_normal(const VertexView& vertices, int u, int v,
                                      const NormalEstimationParams& p) {
-  const Eigen::Vector3f none = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
-  const Eigen::Vector3f centre = vertices(u, v);
-  if (!is_finite_value(centre.z())) return none;
-  const float jump = p.max_depth_jump * centre.z();
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
-  int count = 0;
-  for (int dv = -p.half_window; dv <= p.half_window; ++dv) {
-    for (int du = -p.half_window; du <= p.half_window; ++du) {
-      if (!vertices.in_bounds(u + du, v + dv)) continue;
-      const Eigen::Vector3f& X = vertices(u + du, v + dv);
-      if (!is_finite_value(X.z()) || fabsf(X.z() - centre.z()) > jump) continue;
-      const Eigen::Vector3d d = (X - centre).cast<double>();  // centred for precision
-      sum += d;
-      outer += d * d.transpose();
-      ++count;
-    }
-  }
-  return plane_normal_from_moments(sum, outer, count, centre, p);
+  Eigen::Vector3d sum;
+  Eigen::Matrix3d outer;
+  int count;
+  if (!window_moments(vertices, u, v, p, sum, outer, count))
+    return Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  return plane_normal_from_moments(sum, outer, count, vertices(u, v), p);
 }
 
 }  // namespace jpcr

@@ -101,8 +101,8 @@ TEST(QuadricModel, PrincipalCurvaturesAreEigenvaluesAndDirectionIsEigenvector) {
     EXPECT_NEAR(local.y(), std::sin(phi), 1e-12);
   }
   // Diagonal K (b = 0): φ = 0 for a > c, π/2 for a < c; an umbilic gives e_x.
-  for (const Eigen::Vector3d abc : {Eigen::Vector3d(2, 0, 1), Eigen::Vector3d(1, 0, 2),
-                                    Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(0, 0, 0)}) {
+  for (const Eigen::Vector3d& abc : {Eigen::Vector3d(2, 0, 1), Eigen::Vector3d(1, 0, 2),
+                                     Eigen::Vector3d(1, 0, 1), Eigen::Vector3d(0, 0, 0)}) {
     Quadricd q = random_quadric(rng);
     q.a = abc(0), q.b = abc(1), q.c = abc(2);
     const Eigen::Vector3d local = q.R * principal_direction(q);

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <random>
 
+#include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
 
 #include <gtest/gtest.h>
@@ -19,8 +20,22 @@ namespace {
 
 struct Agreement {
   int pixels = 0, valid = 0, validity_differs = 0;
-  double worst_angle = 0.0;  // rad
+  double worst_angle = 0.0;   // rad
+  double worst_excess = 0.0;  // the largest angle / angle_bound (below 1 passes)
+  double conditioning_at_worst = 0.0;
 };
+
+// The bound on the angle between the two normals at one pixel, from the eigenvalues
+// λ_min ≤ λ_mid ≤ λ_max of its window's scatter matrix. Both round the normal to float (6e-8
+// each). Their moments differ by rounding (the shortcut's are uncentred), and the smallest
+// eigenvector turns by such a difference over the gap λ_mid − λ_min: a window of noise, with
+// no plane in it, has λ_min ≈ λ_mid. An empirical form: over 40 random frames (654 pixels above
+// 3e-7 rad), angle ≤ 1.32 √ε λ_max / gap (ε |X|² / gap and ε |X|² λ_max / gap² fit far worse),
+// so 4 √ε leaves a factor 3. Where the plane is well defined the bound is below 1e-6 rad.
+double angle_bound(const Eigen::Vector3d& eigenvalues) {
+  const double sqrt_epsilon = 1.49e-8;
+  return 2e-7 + 4 * sqrt_epsilon * eigenvalues(2) / (eigenvalues(1) - eigenvalues(0));
+}
 
 Agreement compare_with_plane_normal(const VertexMap& vertices, const NormalEstimationParams& p) {
   const NormalMap normals = estimate_normals(vertices, p);
@@ -36,7 +51,20 @@ Agreement compare_with_plane_normal(const VertexMap& vertices, const NormalEstim
       ++a.valid;
       const double angle = std::atan2(n.cast<double>().cross(reference.cast<double>()).norm(),
                                       n.cast<double>().dot(reference.cast<double>()));
+      Eigen::Vector3d sum;
+      Eigen::Matrix3d outer;
+      int count = 0;
+      window_moments(view, u, v, p, sum, outer, count);
+      const Eigen::Vector3d mean = sum / count;
+      const Eigen::Vector3d ev =
+          Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(outer / count - mean * mean.transpose())
+              .eigenvalues();
       a.worst_angle = std::max(a.worst_angle, angle);
+      const double excess = angle / angle_bound(ev);
+      if (excess > a.worst_excess) {
+        a.worst_excess = excess;
+        a.conditioning_at_worst = ev(2) / (ev(1) - ev(0));
+      }
     }
   return a;
 }
@@ -50,9 +78,9 @@ void punch_holes(VertexMap& vertices, double fraction, std::uint64_t seed) {
       if (hole(rng)) vertices(u, v) = invalid_vector();
 }
 
-// Both sum the same window points in double; the shortcut's moments are uncentred, which costs
-// about log10(|X|² / window²) ≈ 5 of double's 16 digits, and both round the normal to float
-// (6e-8). 1e-5 rad leaves two orders of magnitude; validity must agree exactly.
+// Both sum the same window points in double and must give the same normal up to angle_bound,
+// which grows where the window's plane is ill-defined (a small gap below λ_mid); validity must
+// agree exactly.
 TEST(SurfaceNormals, ShortcutAgreesWithPlaneNormal) {
   const std::uint64_t seed = test::test_seed();
   std::printf("seed %llu (JPCR_TEST_SEED replays it)\n", static_cast<unsigned long long>(seed));
@@ -69,12 +97,14 @@ TEST(SurfaceNormals, ShortcutAgreesWithPlaneNormal) {
     punch_holes(vertices, 0.01, seed);
     for (const NormalEstimationParams& p : {NormalEstimationParams{}, tight, wide, small}) {
       const Agreement a = compare_with_plane_normal(vertices, p);
-      std::printf("%dx%d h=%d jump %.2f: %d of %d valid, validity differs at %d, worst %.2e rad\n",
-                  w, h, p.half_window, p.max_depth_jump, a.valid, a.pixels, a.validity_differs,
-                  a.worst_angle);
+      std::printf(
+          "%dx%d h=%d jump %.2f: %d of %d valid, validity differs at %d, worst %.2e rad, "
+          "worst angle / bound %.2f (at λ_max / (λ_mid - λ_min) = %.3g)\n",
+          w, h, p.half_window, p.max_depth_jump, a.valid, a.pixels, a.validity_differs,
+          a.worst_angle, a.worst_excess, a.conditioning_at_worst);
       EXPECT_GT(a.valid, a.pixels / 2) << "seed " << seed;
       EXPECT_EQ(a.validity_differs, 0) << "seed " << seed;
-      EXPECT_LT(a.worst_angle, 1e-5) << "seed " << seed;
+      EXPECT_LT(a.worst_excess, 1.0) << "seed " << seed;
     }
   }
 }
