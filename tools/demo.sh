@@ -21,7 +21,7 @@ echo "== trajectory metrics of $data (ground truth against itself) =="
 "$build/tools/jpcr_eval" traj --gt "$data/groundtruth.txt" --est "$data/groundtruth.txt" \
   --out "$out/eval.json"
 echo "== curvature of the first 3 frames: Quad IT and Quad LS against the exact ground truth =="
-printf 'quadric:\n  fit:\n    fair_n0_per_range: 0.03\n    gate_per_range: 0.03\n' > "$out/range1.yaml"
+printf 'quadric:\n  fit:\n    fair_n0_per_range: 0.1\n    gate_per_range: 0.03\n' > "$out/range1.yaml"
 "$build/tools/jpcr_curvature" --dataset "$data" --method it --frames 0:3 --params "$out/range1.yaml" \
   --out "$out/quad_it"
 "$build/tools/jpcr_curvature" --dataset "$data" --method ls --frames 0:3 --out "$out/quad_ls"

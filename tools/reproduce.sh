@@ -71,12 +71,17 @@ curvature_methods="it ls"  # and the peer, CGAL jet fitting, where jpcr_curvatur
 "$bin/jpcr_curvature" --help | grep -q "jet (the peer" && curvature_methods="it ls jet"
 start=$(date +%s) failures=0
 
-# The fit's weight and gate grow with the noise (3 σ at σ = k % of the range, as the demo).
-noise_params() {  # k → a params file
-  local k=$1 f=$runs/params_range$1.yaml
+# The weight n₀ and the gate grow with the noise σ = k % of the range (README "Range noise"):
+# gate = 3 σ for every method; n₀ = 3 σ for the pose methods (jpcr_run: the weight also discounts
+# frame-to-frame misassociations) and 10 σ for the single-frame curvature fits (jpcr_curvature:
+# only depth edges are outliers there, and the gate drops them).
+noise_params() {  # k role(pose|curvature) → a params file
+  local k=$1 role=$2 f=$runs/params_${2}_range$1.yaml
   if [[ $k == 0 ]]; then : > "$f"; else
-    local g; g=$(/usr/bin/python3 -c "print(0.03 * $k)")
-    printf 'quadric:\n  fit:\n    fair_n0_per_range: %s\n    gate_per_range: %s\n' "$g" "$g" > "$f"
+    local per=3; [[ $role == curvature ]] && per=10
+    local n g; n=$(/usr/bin/python3 -c "print(round($per * $k / 100, 6))")
+    g=$(/usr/bin/python3 -c "print(round(3 * $k / 100, 6))")
+    printf 'quadric:\n  fit:\n    fair_n0_per_range: %s\n    gate_per_range: %s\n' "$n" "$g" > "$f"
   fi
   echo "$f"
 }
@@ -106,11 +111,12 @@ for scene in room_spheres cylinders_boxes torus_saddle; do
     [[ -f $seq/groundtruth.txt ]] || "$bin/jpcr_synth" --scene "$scene" --trajectory walk \
       --frames "$frames" --noise "$noise" --size "$size" --seed 1 --out "$seq" --force \
       > "$cell/synth.log" 2>&1
-    params=$(noise_params "$k")
+    params=$(noise_params "$k" pose)
     for m in $methods; do
       say "$scene noise $k %: $m ($(( $(date +%s) - start )) s)"
       run_method "$seq" "$m" "$params" "$cell/$m"
     done
+    params=$(noise_params "$k" curvature)
     # The last frame is left out: the curvature table compares the frames J-ftf refines, each
     # the first of a pair (reproduce_report.py).
     for m in $curvature_methods; do

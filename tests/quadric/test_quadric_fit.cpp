@@ -204,8 +204,10 @@ double rms_error(const QuadricMap& map, const CurvatureImage& gt, const QuadricM
   return n > 0 ? std::sqrt(sum / n) : NAN;
 }
 
-// Under range noise of k % the weight constant and the gate follow the noise (n₀ = gate = 3σ with
-// σ = k % of the range, quadric_fit_kernel.hpp); measured RMS at 1 %: Quad IT 3.0, Quad LS 3.5.
+// Under range noise of k % the weight constant and the gate follow the noise (n₀ = 10 σ and
+// gate = 3 σ with σ = k % of the range, README "Range noise"). Measured RMS (1/m), Quad IT
+// against Quad LS: 1.095 / 1.484 at 0.5 %, 2.010 / 2.362 at 1 %. Not asserted at 3 %: on this one
+// 320x240 frame Quad IT loses there with any n₀ from 3 σ to 1000 σ (2.69–2.72 against 2.58).
 TEST(QuadricFit, QuadItBeatsQuadLsUnderRangeNoise) {
   const CameraIntrinsics camera = synthetic_camera(320, 240);
   const SyntheticScene scene = room_with(Sphere{{0, 0, 1.2}, 0.3});
@@ -213,13 +215,15 @@ TEST(QuadricFit, QuadItBeatsQuadLsUnderRangeNoise) {
   const LeastSquaresQuadric ls;
   for (double k : {0.5, 1.0}) {
     QuadricParams params;
-    params.fit.fair_n0_per_range = params.fit.gate_per_range = static_cast<float>(3 * k / 100);
+    params.fit.fair_n0_per_range = static_cast<float>(10 * k / 100);
+    params.fit.gate_per_range = static_cast<float>(3 * k / 100);
     const QuadricFit it(params);
     const std::string noise = "range:" + std::to_string(k);
     const Fitted a = fit_scene(scene, camera, pose, it, noise);
     const Fitted b = fit_scene(scene, camera, pose, ls, noise);
     const double e_it = rms_error(a.map, a.frame.curvature, b.map);
     const double e_ls = rms_error(b.map, b.frame.curvature, a.map);
+    std::printf("%s: RMS Quad IT %.3f, Quad LS %.3f 1/m\n", noise.c_str(), e_it, e_ls);
     EXPECT_LT(e_it, e_ls) << noise;
   }
 }
