@@ -170,6 +170,23 @@ def curvature_errors(cell, bin_dir, only=None, support="0", tag="all"):
     return out
 
 
+def trajectory_errors(bin_dir, gt, run_dir):
+    """jpcr_eval traj's JSON for a run's trajectory.txt against the TUM ground truth, or {}."""
+    est = os.path.join(run_dir, "trajectory.txt")
+    if not (os.path.exists(gt) and os.path.exists(est)):
+        return {}
+    res = subprocess.run([os.path.join(bin_dir, "jpcr_eval"), "traj", "--gt", gt, "--est", est,
+                          "--json"], capture_output=True, text=True)
+    return json.loads(res.stdout) if res.returncode == 0 else {}
+
+
+def rmse(errors, *keys):
+    """errors[k1][k2]...["rmse"], or None where a key (e.g. RPE per second on < 1 s) is missing."""
+    for k in keys + ("rmse",):
+        errors = errors.get(k) if isinstance(errors, dict) else None
+    return errors
+
+
 def zero_rms(cell, frames, support):
     """RMS of the ground-truth κ over the interior pixels of `frames`: the error of κ = 0."""
     d = os.path.join(cell, "sequence", "curvature")
@@ -464,17 +481,25 @@ def main():
     real = os.path.join(a.runs, "real")
     if os.path.isdir(real):
         w(f"## Real data: TUM fr1/xyz (`{a.tum}`)\n")
-        w("| method | frames | ATE (m) | RPE (m/frame) | RPE (deg/frame) | wall (s) |")
-        w("|---|---|---|---|---|---|")
+        w("`jpcr_eval traj` against the sequence's ground truth (TUM conventions: ATE after Horn "
+          "alignment; RPE without alignment, per frame and per second).\n")
+        w("| method | frames | ATE (m) | RPE (m/frame) | RPE (deg/frame) | RPE (m/s) | "
+          "RPE (deg/s) | wall (s) |")
+        w("|---|---|---|---|---|---|---|---|")
+        gt = os.path.join(a.tum, "groundtruth.txt")
         for m in ["icp-ftf", "j-ftf", "pipeline"]:
             r = load_json(os.path.join(real, m, "report.json"))
             e = pose_errors(os.path.join(real, m)) or {}
-            if not r or not r.get("errors"):
+            t = trajectory_errors(a.bin, gt, os.path.join(real, m))
+            if not r or not t:
                 continue
-            er = r["errors"]
-            w(f"| {LABEL.get(m, m)} | {r['frames']} | {fmt(er.get('ate_rmse_m'), '.4f')} | "
-              f"{fmt(er.get('rpe_frame_translation_rmse_m'), '.4f')} | "
-              f"{fmt(er.get('rpe_frame_rotation_rmse_deg'), '.3f')} | {fmt(e.get('wall'), '.0f')} |")
+            w(f"| {LABEL.get(m, m)} | {r['frames']} | "
+              f"{fmt(rmse(t, 'ate', 'translation_m'), '.4f')} | "
+              f"{fmt(rmse(t, 'rpe_per_frame', 'translation_m'), '.5f')} | "
+              f"{fmt(rmse(t, 'rpe_per_frame', 'rotation_deg'), '.3f')} | "
+              f"{fmt(rmse(t, 'rpe_per_second', 'translation_m'), '.5f')} | "
+              f"{fmt(rmse(t, 'rpe_per_second', 'rotation_deg'), '.3f')} | "
+              f"{fmt(e.get('wall'), '.0f')} |")
         w("")
         peers = os.path.join(real, "peers.md")
         if os.path.exists(peers) and os.path.getsize(peers):
