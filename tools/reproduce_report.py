@@ -487,12 +487,34 @@ def main():
           "RPE (deg/s) | wall (s) |")
         w("|---|---|---|---|---|---|---|---|")
         gt = os.path.join(a.tum, "groundtruth.txt")
-        for m in ["icp-ftf", "j-ftf", "pipeline"]:
-            r = load_json(os.path.join(real, m, "report.json"))
-            e = pose_errors(os.path.join(real, m)) or {}
-            t = trajectory_errors(a.bin, gt, os.path.join(real, m))
+        # J-ftf runs on the first frames only: ICP-ftf's poses of those frames (frame to frame,
+        # so the same as an ICP-ftf run on them) give the row to compare it with.
+        same_name = "icp-ftf_jftf_frames"
+        same = os.path.join(real, same_name)
+        jftf_traj = os.path.join(real, "j-ftf", "trajectory.txt")
+        jftf_stamps = set()
+        if os.path.exists(jftf_traj):
+            jftf_stamps = {row[0] for row in read_tum(jftf_traj)}
+        if jftf_stamps and os.path.exists(os.path.join(real, "icp-ftf", "trajectory.txt")):
+            os.makedirs(same, exist_ok=True)
+            with open(os.path.join(real, "icp-ftf", "trajectory.txt")) as src, \
+                    open(os.path.join(same, "trajectory.txt"), "w") as dst:
+                for line in src:
+                    f = line.split()
+                    if line.startswith("#") or (f and float(f[0]) in jftf_stamps):
+                        dst.write(line)
+        rows = [("icp-ftf", "icp-ftf"), (f"ICP-ftf, J-ftf's {len(jftf_stamps)} frames", same_name),
+                ("j-ftf", "j-ftf"), ("pipeline", "pipeline")]
+        real_rows = {}
+        for m, d in rows:
+            run = os.path.join(real, d)
+            r = {"frames": len(jftf_stamps)} if d == same_name else load_json(
+                os.path.join(run, "report.json"))
+            e = pose_errors(run) or {}
+            t = trajectory_errors(a.bin, gt, run)
             if not r or not t:
                 continue
+            real_rows[d] = t
             w(f"| {LABEL.get(m, m)} | {r['frames']} | "
               f"{fmt(rmse(t, 'ate', 'translation_m'), '.4f')} | "
               f"{fmt(rmse(t, 'rpe_per_frame', 'translation_m'), '.5f')} | "
@@ -501,6 +523,16 @@ def main():
               f"{fmt(rmse(t, 'rpe_per_second', 'rotation_deg'), '.3f')} | "
               f"{fmt(e.get('wall'), '.0f')} |")
         w("")
+        ratio = [None, None]
+        if same_name in real_rows and "j-ftf" in real_rows:
+            for i, q in enumerate(("translation_m", "rotation_deg")):
+                x = rmse(real_rows["j-ftf"], "rpe_per_frame", q)
+                y = rmse(real_rows[same_name], "rpe_per_frame", q)
+                ratio[i] = x / y if x is not None and y else None
+        if None not in ratio:
+            w(f"On the same {len(jftf_stamps)} frames, J-ftf's per-frame RPE is "
+              f"{ratio[0]:.2f}x ICP-ftf's in translation and {ratio[1]:.2f}x in rotation "
+              "(below 1: J-ftf better).\n")
         peers = os.path.join(real, "peers.md")
         if os.path.exists(peers) and os.path.getsize(peers):
             w("The OpenCV peer on the same frames, in the same process (`bench_icp_peers`):\n")
