@@ -76,7 +76,8 @@ start=$(date +%s) failures=0
 # frame-to-frame misassociations) and 10 σ for the single-frame curvature fits (jpcr_curvature:
 # only depth edges are outliers there, and the gate drops them).
 noise_params() {  # k role(pose|curvature) → a params file
-  local k=$1 role=$2 f=$runs/params_${2}_range$1.yaml
+  local k=$1 role=$2
+  local f=$runs/params_${role}_range${k}.yaml
   if [[ $k == 0 ]]; then : > "$f"; else
     local per=3; [[ $role == curvature ]] && per=10
     local n g; n=$(/usr/bin/python3 -c "print(round($per * $k / 100, 6))")

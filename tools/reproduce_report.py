@@ -13,6 +13,7 @@ import re
 import shutil
 import subprocess
 import sys
+import tempfile
 
 import numpy as np
 from numpy.lib.stride_tricks import sliding_window_view
@@ -59,7 +60,8 @@ def load_json(path):
 def noise_rules(runs):
     """The weight n₀ and the gate per metre of range that reproduce.sh gave each role at 1 %."""
     rules = []
-    for role, who in (("pose", "pose methods (jpcr_run)"), ("curvature", "Quad IT (jpcr_curvature)")):
+    roles = (("pose", "pose methods (jpcr_run)"), ("curvature", "Quad IT (jpcr_curvature)"))
+    for role, who in roles:
         try:
             text = open(os.path.join(runs, f"params_{role}_range1.yaml")).read()
         except OSError:
@@ -488,34 +490,38 @@ def main():
         w("|---|---|---|---|---|---|---|---|")
         gt = os.path.join(a.tum, "groundtruth.txt")
         # J-ftf runs on the first frames only: ICP-ftf's poses of those frames (frame to frame,
-        # so the same as an ICP-ftf run on them) give the row to compare it with.
-        same_name = "icp-ftf_jftf_frames"
-        same = os.path.join(real, same_name)
+        # so the same as an ICP-ftf run on them) give the row to compare it with. They go to a
+        # scratch directory, not into the runs.
+        scratch = tempfile.TemporaryDirectory()
+        same_name = "icp-ftf, J-ftf's frames"
         jftf_traj = os.path.join(real, "j-ftf", "trajectory.txt")
+        icp_traj = os.path.join(real, "icp-ftf", "trajectory.txt")
         jftf_stamps = set()
         if os.path.exists(jftf_traj):
             jftf_stamps = {row[0] for row in read_tum(jftf_traj)}
-        if jftf_stamps and os.path.exists(os.path.join(real, "icp-ftf", "trajectory.txt")):
-            os.makedirs(same, exist_ok=True)
-            with open(os.path.join(real, "icp-ftf", "trajectory.txt")) as src, \
-                    open(os.path.join(same, "trajectory.txt"), "w") as dst:
+        same_frames = 0
+        if jftf_stamps and os.path.exists(icp_traj):
+            with open(icp_traj) as src, \
+                    open(os.path.join(scratch.name, "trajectory.txt"), "w") as dst:
                 for line in src:
                     f = line.split()
-                    if line.startswith("#") or (f and float(f[0]) in jftf_stamps):
+                    keep = f and not line.startswith("#") and float(f[0]) in jftf_stamps
+                    same_frames += bool(keep)
+                    if keep or line.startswith("#"):
                         dst.write(line)
-        rows = [("icp-ftf", "icp-ftf"), (f"ICP-ftf, J-ftf's {len(jftf_stamps)} frames", same_name),
-                ("j-ftf", "j-ftf"), ("pipeline", "pipeline")]
+        dirs = {"icp-ftf": os.path.join(real, "icp-ftf"), same_name: scratch.name,
+                "j-ftf": os.path.join(real, "j-ftf"), "pipeline": os.path.join(real, "pipeline")}
+        labels = {same_name: f"ICP-ftf, J-ftf's {same_frames} frames"}
         real_rows = {}
-        for m, d in rows:
-            run = os.path.join(real, d)
-            r = {"frames": len(jftf_stamps)} if d == same_name else load_json(
+        for m, run in dirs.items():
+            r = {"frames": same_frames} if m == same_name else load_json(
                 os.path.join(run, "report.json"))
             e = pose_errors(run) or {}
             t = trajectory_errors(a.bin, gt, run)
             if not r or not t:
                 continue
-            real_rows[d] = t
-            w(f"| {LABEL.get(m, m)} | {r['frames']} | "
+            real_rows[m] = t
+            w(f"| {labels.get(m, LABEL.get(m, m))} | {r['frames']} | "
               f"{fmt(rmse(t, 'ate', 'translation_m'), '.4f')} | "
               f"{fmt(rmse(t, 'rpe_per_frame', 'translation_m'), '.5f')} | "
               f"{fmt(rmse(t, 'rpe_per_frame', 'rotation_deg'), '.3f')} | "
@@ -530,9 +536,10 @@ def main():
                 y = rmse(real_rows[same_name], "rpe_per_frame", q)
                 ratio[i] = x / y if x is not None and y else None
         if None not in ratio:
-            w(f"On the same {len(jftf_stamps)} frames, J-ftf's per-frame RPE is "
+            w(f"On the same {same_frames} frames, J-ftf's per-frame RPE is "
               f"{ratio[0]:.2f}x ICP-ftf's in translation and {ratio[1]:.2f}x in rotation "
               "(below 1: J-ftf better).\n")
+        scratch.cleanup()
         peers = os.path.join(real, "peers.md")
         if os.path.exists(peers) and os.path.getsize(peers):
             w("The OpenCV peer on the same frames, in the same process (`bench_icp_peers`):\n")
