@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # Regenerates the paper's evaluation (issue 10) from nothing: synthetic scenes × range noise for
-# the pose tables (I–III) and the curvature comparison (Fig. 6), a rail drift sequence (Fig. 5),
-# the real TUM frames with the OpenCV peer, curvature pictures (Fig. 1), timings, and writes a
-# self-contained report (index.md + PNG figures) with the paper's own numbers beside ours.
+# the pose tables (I–III) and the curvature comparison (Fig. 6), Kinect-like noise (not in the
+# paper), a rail drift sequence (Fig. 5), the real TUM frames with the OpenCV peer, curvature
+# pictures (Fig. 1), timings, and a self-contained report (index.md + PNG figures).
 #
 #   tools/reproduce.sh [--quick] [--out DIR] [--tum DIR] [--camera CAM.yaml] [--build DIR] [--no-build]
 #                      [--size WxH] [--frames N]
@@ -22,6 +22,7 @@ args="$*"
 quick=0 no_build=0 out="" tum="" camera=configs/tum_fr1.yaml
 build=${JPCR_BUILD_DIR:-build}
 size=640x480 frames=4 window=4 rail_frames=200 rail_size=320x240 real_frames=300 real_jftf=10
+kinect_frames=8
 usage() { sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; }
 while [[ $# -gt 0 ]]; do
   case $1 in
@@ -44,6 +45,7 @@ while [[ $# -gt 0 ]]; do
 done
 if [[ $quick == 1 ]]; then
   size=160x120 frames=3 window=3 rail_frames=24 rail_size=160x120 real_frames=8 real_jftf=3
+  kinect_frames=3
   out=${out:-out/reproduce_quick}
   tum=${tum:-tests/data/tum_fr1_xyz_20}
 fi
@@ -100,6 +102,7 @@ run_method() {  # dataset method params out [extra...]
   }
   /usr/bin/python3 -c "import sys; print(float(sys.argv[2]) - float(sys.argv[1]))" "$t0" "$(date +%s.%N)" \
     > "$dir/wall_seconds"
+  git rev-parse --short HEAD > "$dir/revision" 2>/dev/null || true
 }
 
 # 1. Synthetic scenes × noise: pose methods and curvature methods.
@@ -126,6 +129,24 @@ for scene in room_spheres cylinders_boxes torus_saddle; do
         --frames "0:$((frames - 1))" --out "$cell/quad_$m" > "$cell/quad_$m.log" 2>&1
     done
   done
+done
+
+# 1b. Kinect-like noise (jpcr_synth --noise kinect): ICP-ftf and J-ftf with the built-in weights
+# and with configs/kinect_far.yaml, on consecutive frames of the same three scenes.
+for scene in room_spheres cylinders_boxes torus_saddle; do
+  cell=$runs/$scene/kinect
+  seq=$cell/sequence
+  mkdir -p "$cell"
+  [[ -f $seq/groundtruth.txt ]] || "$bin/jpcr_synth" --scene "$scene" --trajectory walk \
+    --frames "$kinect_frames" --noise kinect --size "$size" --seed 1 --out "$seq" --force \
+    > "$cell/synth.log" 2>&1
+  : > "$cell/params.yaml"
+  for m in icp-ftf j-ftf; do
+    say "$scene kinect noise: $m ($(( $(date +%s) - start )) s)"
+    run_method "$seq" "$m" "$cell/params.yaml" "$cell/$m"
+  done
+  say "$scene kinect noise: j-ftf, configs/kinect_far.yaml ($(( $(date +%s) - start )) s)"
+  run_method "$seq" j-ftf configs/kinect_far.yaml "$cell/j-ftf_kinect_far"
 done
 
 # 2. Drift along a straight rail (10 mm per frame, Kinect-like noise).
