@@ -279,7 +279,8 @@ def main():
           + "; ".join(rules) + " (README, \"Range noise\").\n")
     if a.recomputed_at:
         w(f"The tables and figures were recomputed from that run's outputs by "
-          f"`tools/reproduce_report.py` at revision `{a.recomputed_at}`; no method was re-run.\n")
+          f"`tools/reproduce_report.py` at revision `{a.recomputed_at}`; no method was re-run "
+          "except in the sections that name the revision of their own runs.\n")
     if a.quick:
         w("> **--quick run**: tiny images and few frames, to check that the pipeline of the report "
           "works; its numbers are not the evaluation.\n")
