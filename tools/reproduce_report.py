@@ -222,6 +222,31 @@ def quat_to_R(q):
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
+def relative_agreement(path_a, path_b):
+    """RMS (m, deg) of the difference between two trajectories' frame-to-frame motions, over the
+    consecutive frames of b whose stamps a also has: how far apart two estimators are, with no
+    ground truth in it."""
+    def poses(path):
+        out = {}
+        for row in read_tum(path):
+            T = np.eye(4)
+            T[:3, :3], T[:3, 3] = quat_to_R(row[4:8]), row[1:4]
+            out[round(row[0], 6)] = T
+        return out
+    a, b = poses(path_a), poses(path_b)
+    stamps = sorted(b)
+    dt, dr = [], []
+    for s0, s1 in zip(stamps, stamps[1:]):
+        if s0 not in a or s1 not in a:
+            continue
+        D = np.linalg.inv(np.linalg.inv(a[s0]) @ a[s1]) @ (np.linalg.inv(b[s0]) @ b[s1])
+        dt.append(np.linalg.norm(D[:3, 3]))
+        dr.append(np.degrees(np.arccos(np.clip((np.trace(D[:3, :3]) - 1) / 2, -1, 1))))
+    if not dt:
+        return None
+    return float(np.sqrt(np.mean(np.square(dt)))), float(np.sqrt(np.mean(np.square(dr)))), len(dt)
+
+
 def drift_curve(gt_path, est_path):
     """Distance travelled and accumulated translation error per frame, both trajectories expressed
     relative to their first pose (no alignment: drift, as the paper's Fig. 5)."""
@@ -571,6 +596,20 @@ def main():
             w(f"On the same {same_frames} frames, J-ftf's per-frame RPE is "
               f"{ratio[0]:.2f}x ICP-ftf's in translation and {ratio[1]:.2f}x in rotation "
               "(below 1: J-ftf better).\n")
+        agree = (relative_agreement(icp_traj, jftf_traj)
+                 if os.path.exists(icp_traj) and os.path.exists(jftf_traj) else None)
+        rpe_t = rmse(real_rows[same_name], "rpe_per_frame", "translation_m") \
+            if same_name in real_rows else None
+        if agree and rpe_t:
+            shared = ("Most of the per-frame RPE is thus shared by both methods: error of the "
+                      "ground truth itself (motion capture, time stamps) or of the sensor model "
+                      "both use." if agree[0] < 0.5 * rpe_t else "")
+            w(f"How much of that the ground truth can tell: J-ftf's and ICP-ftf's frame-to-frame "
+              f"motions differ from each other by {agree[0]:.5f} m and {agree[1]:.3f} deg (RMS over "
+              f"{agree[2]} pairs), while each differs from the ground truth's by about "
+              f"{rpe_t:.5f} m and "
+              f"{fmt(rmse(real_rows[same_name], 'rpe_per_frame', 'rotation_deg'), '.3f')} deg. "
+              f"{shared}\n")
         scratch.cleanup()
         peers = os.path.join(real, "peers.md")
         if os.path.exists(peers) and os.path.getsize(peers):
