@@ -520,8 +520,8 @@ def main():
                        if os.path.exists(os.path.join(d, m, "revision"))})
         if revs:
             w(f"These runs were made at revision {', '.join(f'`{r}`' for r in revs)}.\n")
-        w("| scene | frames | ICP-ftf t (m) | J-ftf t (m) | J-ftf kinect_far t (m) | ICP-ftf r (rad) "
-          "| J-ftf r (rad) | J-ftf kinect_far r (rad) | ratio t, built-in | ratio t, kinect_far |")
+        w("| scene | frames | ICP-ftf t (m) | J-ftf t (m) | J-ftf kinect_far t (m) | "
+          "ICP-ftf r (rad) | J-ftf r (rad) | J-ftf kinect_far r (rad) | ratio t, built-in | ratio t, kinect_far |")
         w("|---|---|---|---|---|---|---|---|---|---|")
         for sc, d in kinect:
             e = {m: pose_errors(os.path.join(d, m)) or {}
@@ -605,8 +605,8 @@ def main():
                       "ground truth itself (motion capture, time stamps) or of the sensor model "
                       "both use." if agree[0] < 0.5 * rpe_t else "")
             w(f"How much of that the ground truth can tell: J-ftf's and ICP-ftf's frame-to-frame "
-              f"motions differ from each other by {agree[0]:.5f} m and {agree[1]:.3f} deg (RMS over "
-              f"{agree[2]} pairs), while each differs from the ground truth's by about "
+              f"motions differ from each other by {agree[0]:.5f} m and {agree[1]:.3f} deg "
+              f"(RMS over {agree[2]} pairs), while each differs from the ground truth's by about "
               f"{rpe_t:.5f} m and "
               f"{fmt(rmse(real_rows[same_name], 'rpe_per_frame', 'rotation_deg'), '.3f')} deg. "
               f"{shared}\n")
@@ -684,6 +684,9 @@ def main():
     problems += [f"J-full not below ICP-bundle: {s} {k} %" for s, k, r in ratios_bundle if r >= 1]
     if cells < len(SCENES) * len(NOISES):
         problems.append(f"{cells} of {len(SCENES) * len(NOISES)} curvature cells complete")
+    problems += [f"kinect noise: no {m} run with errors for {sc}"
+                 for sc in SCENES for m in ["icp-ftf", "j-ftf", "j-ftf_kinect_far"]
+                 if not pose_errors(os.path.join(a.runs, sc, "kinect", m))]
     for m in ["icp-ftf", "pipeline"]:
         if not os.path.exists(os.path.join(rail, m, "trajectory.txt")):
             problems.append(f"rail: no {m} run")
