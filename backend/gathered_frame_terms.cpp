@@ -76,6 +76,7 @@ int GatheredFrameTerms<Lane>::gather(const VertexView& view, const RigidMotion<d
   }
   // d = R Q + (t − p̄): the large translation cancels in double before the lanes see it.
   const Eigen::Vector3d offset = T.t - centre;
+  ray_origin_ = -offset;
   Lane *dx = sample(0), *dy = sample(1), *dz = sample(2), *d2 = sample(3), *mask = sample(4);
   centre_samples(T.R.data(), offset.data(), n, qx, qy, qz, dx, dy, dz, d2);
   for (int k = 0; k < n; ++k)
@@ -88,13 +89,19 @@ int GatheredFrameTerms<Lane>::gather(const VertexView& view, const RigidMotion<d
 
 template <typename Lane>
 void GatheredFrameTerms<Lane>::accumulate(const Quadricd& q, const SampleGate<double>& limits,
-                                          bool with_pose, FrameTerms<double>& out) {
+                                          bool with_pose, double ray_min_cos2,
+                                          FrameTerms<double>& out) {
   const QuadricScalars<Lane> qs = QuadricScalars<Lane>::from(q.cast<Lane>());
   const GatheredSamples<Lane> s{sample(0), sample(1), sample(2), sample(3), sample(4), n_};
   const Lane gate = static_cast<Lane>(limits.gate), n0 = static_cast<Lane>(limits.n0);
+  // The ray of sample d is R (d + p̄ − o) in local axes (ray_foot_moment).
+  const Eigen::Vector3d origin = q.R * ray_origin_;
+  const RayFoot<Lane> foot{static_cast<Lane>(origin.x()), static_cast<Lane>(origin.y()),
+                           static_cast<Lane>(origin.z()), static_cast<Lane>(ray_min_cos2)};
   const SampleCosts costs =
-      with_pose ? fill_sample_columns<Lane, kPoseColumns>(qs, s, gate, n0, capacity_, column(0))
-                : fill_sample_columns<Lane, kQuadricColumns>(qs, s, gate, n0, capacity_, column(0));
+      with_pose
+          ? fill_sample_columns<Lane, kPoseColumns>(qs, s, gate, n0, capacity_, column(0), foot)
+          : fill_sample_columns<Lane, kQuadricColumns>(qs, s, gate, n0, capacity_, column(0));
   double Y[100];
   column_products<Lane>(column(0), n_, capacity_, with_pose ? kPoseColumns : kQuadricColumns, Y);
   auto y = [&Y](int a, int b) { return Y[a * 10 + b]; };

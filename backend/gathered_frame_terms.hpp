@@ -46,9 +46,10 @@ class GatheredFrameTerms {
   int gather(const VertexView& view, const RigidMotion<double>& T, const PixelOffset* pattern,
              int pattern_size, int u, int v, const Eigen::Vector3d& centre);
 
-  /// The frame's FrameTerms (with_pose: also B, A, g_ξ) at quadric q for the gathered samples.
+  /// The frame's FrameTerms (with_pose: also B, A, g_ξ, with the lever arms at the rays' foot
+  /// points unless ray_min_cos2 is kNoRayFoot) at quadric q for the gathered samples.
   void accumulate(const Quadricd& q, const SampleGate<double>& limits, bool with_pose,
-                  FrameTerms<double>& out);
+                  double ray_min_cos2, FrameTerms<double>& out);
 
   /// Σ w r² (gated samples at w(g) g²) and the count inside the gate, for the gathered samples.
   double cost(const Quadricd& q, const SampleGate<double>& limits, int& count);
@@ -58,10 +59,11 @@ class GatheredFrameTerms {
   Lane* column(int i) { return columns_.data() + static_cast<std::size_t>(i) * capacity_; }
 
   int capacity_ = 0;
-  const PixelOffset* pattern_ = nullptr;  // the pattern reach_ and linear_ describe
-  int pattern_width_ = 0;                 // at this image width
-  int reach_ = 0;                         // max |du|, |dv|
-  std::vector<std::ptrdiff_t> linear_;    // dv · width + du per offset
+  const PixelOffset* pattern_ = nullptr;                  // the pattern reach_ and linear_ describe
+  int pattern_width_ = 0;                                 // at this image width
+  int reach_ = 0;                                         // max |du|, |dv|
+  std::vector<std::ptrdiff_t> linear_;                    // dv · width + du per offset
+  Eigen::Vector3d ray_origin_ = Eigen::Vector3d::Zero();  // p̄ − T.t: camera centre to p̄
   int n_ = 0;                  // gathered samples, padded to a multiple of kLanes with mask 0
   std::vector<float> raw_;     // the gathered points Q (x, y, z arrays)
   std::vector<Lane> samples_;  // dx dy dz d² mask
@@ -76,10 +78,10 @@ class GatheredSampler {
   explicit GatheredSampler(int pattern_size) : terms_(pattern_size) {}
 
   void accumulate(const Quadricd& q, const VertexView& view, const RigidMotion<double>& T,
-                  bool with_pose, const PixelOffset* pattern, int pattern_size, int u, int v,
-                  const SampleGate<double>& limits, FrameTerms<double>& out) {
+                  bool with_pose, double ray_min_cos2, const PixelOffset* pattern, int pattern_size,
+                  int u, int v, const SampleGate<double>& limits, FrameTerms<double>& out) {
     terms_.gather(view, T, pattern, pattern_size, u, v, q.center);
-    terms_.accumulate(q, limits, with_pose, out);
+    terms_.accumulate(q, limits, with_pose, ray_min_cos2, out);
   }
   double cost(const Quadricd& q, const VertexView& view, const RigidMotion<double>& T,
               const PixelOffset* pattern, int pattern_size, int u, int v,

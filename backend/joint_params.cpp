@@ -15,6 +15,8 @@ void JointParams::validate() const {
   if (min_frame_terms < 1) throw InputError("min_frame_terms: must be at least 1");
   if (!(min_pivot_ratio > 0.0 && min_pivot_ratio < 1.0))
     throw InputError("min_pivot_ratio: must be in (0, 1)");
+  if (!(ray_min_cosine >= 0.0f && ray_min_cosine < 1.0f))
+    throw InputError("ray_min_cosine: must be in [0, 1) (0: lever arms at the samples)");
   if (!(initial_damping > 0.0)) throw InputError("initial_damping: must be > 0");
   if (!(damping_factor > 1.0)) throw InputError("damping_factor: must be > 1");
   if (!(damping_decrease > 1.0)) throw InputError("damping_decrease: must be > 1");

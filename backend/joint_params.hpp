@@ -23,8 +23,14 @@ struct JointParams {
                                         //    threshold + fraction · c_z (fraction of depth)
   int min_frame_terms = 10;             // terms a frame j needs for its association to count
   double min_pivot_ratio = 1e-2;        // C_p ill-conditioned below it (joint_pixel_kernel.hpp)
-  double initial_damping = 1e-4;        // λ: relative Levenberg damping of diag A and diag C_p
-  double damping_factor = 10.0;         // λ ← λ·f after a rejected step ...
+  // > 0: the other frames' terms take their lever arms at the foot point of each sample's ray,
+  // unless the ray meets the quadric at a cosine below this (accumulate_frame_terms; 0.2 is the
+  // measured setting). 0 (the default, the paper's Jacobians): at the samples. Off by default
+  // until it is measured on every scene and noise level: it removes most of J-ftf's bias under
+  // range noise on some pairs and not on others (accumulate_frame_terms).
+  float ray_min_cosine = 0.0f;
+  double initial_damping = 1e-4;  // λ: relative Levenberg damping of diag A and diag C_p
+  double damping_factor = 10.0;   // λ ← λ·f after a rejected step ...
   double damping_decrease = 3.0;  // ... and λ ← λ/d after an accepted one (d < f: λ settles
                                   // near the smallest damping that works instead of bouncing
                                   // between two values with every other step rejected)
@@ -42,6 +48,7 @@ struct JointParams {
     t.occlusion_fraction = occlusion_fraction;
     t.min_frame_terms = min_frame_terms;
     t.min_pivot_ratio = min_pivot_ratio;
+    t.ray_min_cosine = ray_min_cosine;
     t.estimate_quadrics = estimate_quadrics;
     return t;
   }

@@ -155,6 +155,37 @@ JPCR_HD QuadricLinearization<Scalar> linearize_quadric(const QuadricT<Scalar>& q
   return l;
 }
 
+/// The lever-arm moment m = v × g of a sample, whose first two entries are the tilt entries J₀, J₁
+/// of ∂r/∂γ and which enters the rotation entries of the pose Jacobian (v × g = R (X − p̄) × g),
+/// evaluated at the foot point instead of the sample: the point where the sample's viewing ray
+/// meets the quadric, to first order. With ρ = R (X − o) the ray from the sample's camera
+/// centre o in local axes, the foot point is v_s = v − (r / g·ρ) ρ, so
+///
+///     m_s = v_s × g = v × g − (r / g·ρ) (ρ × g).
+///
+/// Why: a range sensor's error lies along the ray, so at the sample the lever arm moves with the
+/// very error that makes the residual, and Σ w J r of the normal equations has a non-zero mean
+/// at the true pose; at the foot point the lever arm does not move with it (exactly so on a
+/// plane). Where the ray grazes the surface (g·ρ)² < cos²_min |g|² |ρ|², the foot point is far
+/// and ill-defined: the sample keeps its own lever arm, and with cos²_min = kNoRayFoot (> 1)
+/// every sample does. Branch-free for the SIMD loops.
+constexpr double kNoRayFoot = 2.0;
+
+template <typename Scalar>
+JPCR_HD void ray_foot_moment(Scalar r, Scalar vx, Scalar vy, Scalar vz, Scalar gx, Scalar gy,
+                             Scalar rho_x, Scalar rho_y, Scalar rho_z, Scalar min_cos2, Scalar& m0,
+                             Scalar& m1, Scalar& m2) {
+  const Scalar g_rho = gx * rho_x + gy * rho_y - rho_z;  // g = (g_x, g_y, −1)
+  const Scalar g2 = gx * gx + gy * gy + Scalar(1);
+  const Scalar rho2 = rho_x * rho_x + rho_y * rho_y + rho_z * rho_z;
+  const bool along = g_rho * g_rho >= min_cos2 * g2 * rho2 && rho2 > Scalar(0);
+  const Scalar denominator = along ? g_rho : Scalar(1);
+  const Scalar s = along ? r / denominator : Scalar(0);
+  m0 = -vy - vz * gy - s * (-rho_y - rho_z * gy);  // (v × g)_x − s (ρ × g)_x
+  m1 = vz * gx + vx - s * (rho_z * gx + rho_x);    // (v × g)_y − s (ρ × g)_y
+  m2 = vx * gy - vy * gx - s * (rho_x * gy - rho_y * gx);
+}
+
 /// ∂r/∂ξ of a residual whose point is X = T Q, under the left update T ← exp(ξ^) T with
 /// ξ = (v, ω) (method.md §6 "Pose Jacobian"): with g_w = Rᵀ g, J_ξ = [g_wᵀ, (X × g_w)ᵀ].
 template <typename Scalar>

@@ -26,7 +26,8 @@ template <typename Lane, int kColumns>
 JPCR_SIMD_CLONES SampleCosts fill_columns(const QuadricScalars<Lane>& qs, const Lane* __restrict dx,
                                           const Lane* __restrict dy, const Lane* __restrict dz,
                                           const Lane* __restrict d2, const Lane* __restrict mask,
-                                          int n, Lane gate, Lane n0, int stride, Lane* columns) {
+                                          int n, Lane gate, Lane n0, int stride, Lane* columns,
+                                          Lane ox, Lane oy, Lane oz, Lane min_cos2) {
   static_assert(kColumns == kQuadricColumns || kColumns == kPoseColumns, "column set");
   const auto col = [columns, stride](int c) {
     return columns + static_cast<std::size_t>(c) * stride;
@@ -52,9 +53,13 @@ JPCR_SIMD_CLONES SampleCosts fill_columns(const QuadricScalars<Lane>& qs, const 
     inlier_sum += w * l.r * l.r;
     count_sum += inside;
     const Lane sw = std::sqrt(w);
+    Lane m0 = l.J0, m1 = l.J1, m2 = 0;
+    if constexpr (kColumns == kPoseColumns)
+      ray_foot_moment(l.r, l.vx, l.vy, l.vz, l.gx, l.gy, l.vx + ox, l.vy + oy, l.vz + oz, min_cos2,
+                      m0, m1, m2);
     one[k] = sw;
-    j0[k] = sw * l.J0;
-    j1[k] = sw * l.J1;
+    j0[k] = sw * m0;
+    j1[k] = sw * m1;
     j3[k] = sw * l.J3;
     j4[k] = sw * l.J4;
     j5[k] = sw * l.J5;
@@ -62,7 +67,7 @@ JPCR_SIMD_CLONES SampleCosts fill_columns(const QuadricScalars<Lane>& qs, const 
     if constexpr (kColumns == kPoseColumns) {
       gx[k] = sw * l.gx;
       gy[k] = sw * l.gy;
-      m[k] = sw * (l.vx * l.gy - l.vy * l.gx);  // (v × g)_z
+      m[k] = sw * m2;  // (v × g)_z at the foot point
     }
   }
   return {gated_sum, inlier_sum, static_cast<int>(count_sum)};
@@ -155,9 +160,10 @@ JPCR_SIMD_CLONES void products(const Lane* columns, int n, int stride, int cols,
 
 template <typename Lane, int kColumns>
 SampleCosts fill_sample_columns(const QuadricScalars<Lane>& qs, const GatheredSamples<Lane>& s,
-                                Lane gate, Lane n0, int stride, Lane* columns) {
+                                Lane gate, Lane n0, int stride, Lane* columns,
+                                const RayFoot<Lane>& foot) {
   return fill_columns<Lane, kColumns>(qs, s.dx, s.dy, s.dz, s.d2, s.mask, s.n, gate, n0, stride,
-                                      columns);
+                                      columns, foot.ox, foot.oy, foot.oz, foot.min_cos2);
 }
 
 template <typename Lane>
@@ -173,16 +179,20 @@ void column_products(const Lane* columns, int n, int stride, int cols, double* Y
 
 template SampleCosts fill_sample_columns<float, kQuadricColumns>(const QuadricScalars<float>&,
                                                                  const GatheredSamples<float>&,
-                                                                 float, float, int, float*);
+                                                                 float, float, int, float*,
+                                                                 const RayFoot<float>&);
 template SampleCosts fill_sample_columns<float, kPoseColumns>(const QuadricScalars<float>&,
                                                               const GatheredSamples<float>&, float,
-                                                              float, int, float*);
+                                                              float, int, float*,
+                                                              const RayFoot<float>&);
 template SampleCosts fill_sample_columns<double, kQuadricColumns>(const QuadricScalars<double>&,
                                                                   const GatheredSamples<double>&,
-                                                                  double, double, int, double*);
+                                                                  double, double, int, double*,
+                                                                  const RayFoot<double>&);
 template SampleCosts fill_sample_columns<double, kPoseColumns>(const QuadricScalars<double>&,
                                                                const GatheredSamples<double>&,
-                                                               double, double, int, double*);
+                                                               double, double, int, double*,
+                                                               const RayFoot<double>&);
 template SampleCosts sample_costs<float>(const QuadricScalars<float>&,
                                          const GatheredSamples<float>&, float, float);
 template SampleCosts sample_costs<double>(const QuadricScalars<double>&,

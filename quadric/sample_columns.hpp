@@ -39,11 +39,22 @@ struct SampleCosts {
   int count = 0;
 };
 
+/// The foot points of the samples' rays (ray_foot_moment, quadric_model.hpp) for the pose
+/// columns: the sample's camera centre o as p̄ − o in the quadric's local axes, and cos²_min
+/// (kNoRayFoot: the lever arms stay at the samples).
+template <typename Lane>
+struct RayFoot {
+  Lane ox = 0, oy = 0, oz = 0;
+  Lane min_cos2 = Lane(kNoRayFoot);
+};
+
 /// Writes the first kColumns columns (√w (y, r), stride lanes apart) for quadric qs and returns
-/// the costs. kColumns is kQuadricColumns or kPoseColumns.
+/// the costs. kColumns is kQuadricColumns or kPoseColumns; the pose columns take J₀, J₁ and m at
+/// the rays' foot points (`foot`), the quadric columns at the samples.
 template <typename Lane, int kColumns>
 SampleCosts fill_sample_columns(const QuadricScalars<Lane>& qs, const GatheredSamples<Lane>& s,
-                                Lane gate, Lane n0, int stride, Lane* columns);
+                                Lane gate, Lane n0, int stride, Lane* columns,
+                                const RayFoot<Lane>& foot = {});
 
 /// The costs alone (no columns).
 template <typename Lane>

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <string>
@@ -24,8 +25,9 @@ struct JointTestWindow {
 };
 
 /// `count` frames of room_spheres at `width` x 3/4 width. Frame j is the scene's view moved by
-/// j times a 3 cm / 1° camera motion; range noise "range:K" optional.
-inline JointTestWindow render_window(int count, int width, const std::string& noise = "none") {
+/// j times a 3 cm / 1° camera motion; range noise "range:K" optional, drawn from `seed`.
+inline JointTestWindow render_window(int count, int width, const std::string& noise = "none",
+                                     std::uint64_t seed = 7) {
   const SyntheticScene scene = load_scene("room_spheres");
   JointTestWindow w;
   w.camera = synthetic_camera(width, width * 3 / 4);
@@ -35,7 +37,7 @@ inline JointTestWindow render_window(int count, int width, const std::string& no
           .finished();
   for (int j = 0; j < count; ++j) {
     const Eigen::Isometry3d pose = first * se3_exp(j * motion);
-    w.frames.push_back(render(scene, w.camera, pose, parse_noise(noise), 7, j));
+    w.frames.push_back(render(scene, w.camera, pose, parse_noise(noise), seed, j));
     w.vertices.push_back(compute_vertex_map(w.frames.back().frame.depth, w.camera));
     w.truth.push_back(first.inverse() * pose);
   }

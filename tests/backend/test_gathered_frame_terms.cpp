@@ -37,11 +37,13 @@ double relative_difference(const FrameTerms<double>& a, const FrameTerms<double>
 // Every 17th valid pixel of a noisy pair, frame 2 perturbed 1 cm / 1°: the frame-2 terms of the
 // gathered sampler (Lane) against accumulate_frame_terms; returns the worst relative difference.
 template <typename Lane>
-double worst_frame_terms_difference(int& compared) {
+double worst_frame_terms_difference(int& compared, float ray_min_cosine) {
   const JointTestWindow w = render_window(2, 320, "range:1");
   const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
   const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
-  const JointTermParams params = JointParams{}.terms(true);
+  JointParams joint;
+  joint.ray_min_cosine = ray_min_cosine;
+  const JointTermParams params = joint.terms(true);
   const PinholeProjection cam{w.camera.fx, w.camera.fy, w.camera.cx, w.camera.cy};
   const VertexView view2{w.vertices[1].data(), w.vertices[1].width(), w.vertices[1].height()};
   const RigidMotion<double> T = motion(perturbed(w.truth[1], 0.01, 1.0));
@@ -59,11 +61,12 @@ double worst_frame_terms_difference(int& compared) {
     if (!associate(q.center, T, view2, cam, params, su, sv)) continue;
     const SampleGate<double> limits = SampleGate<double>::at(params.fit, q.center);
     FrameTerms<double> reference, gathered;
-    accumulate_frame_terms(q, view2, T, true, pattern.offsets.data(), pattern.size(), su, sv,
+    const double foot = params.ray_min_cos2<double>();
+    accumulate_frame_terms(q, view2, T, true, foot, pattern.offsets.data(), pattern.size(), su, sv,
                            limits, reference);
     if (reference.count < params.min_frame_terms) continue;
-    sampler.accumulate(q, view2, T, true, pattern.offsets.data(), pattern.size(), su, sv, limits,
-                       gathered);
+    sampler.accumulate(q, view2, T, true, foot, pattern.offsets.data(), pattern.size(), su, sv,
+                       limits, gathered);
     int count = 0;
     const double cost =
         sampler.cost(q, view2, T, pattern.offsets.data(), pattern.size(), su, sv, limits, count);
@@ -76,23 +79,29 @@ double worst_frame_terms_difference(int& compared) {
   return worst;
 }
 
-TEST(GatheredFrameTerms, DoubleLanesEqualTheReferenceSums) {
+// Both ways of taking the lever arms: at the samples (the default) and at the rays' foot points
+// (JointParams::ray_min_cosine 0.2).
+class GatheredFrameTerms : public ::testing::TestWithParam<float> {};
+
+TEST_P(GatheredFrameTerms, DoubleLanesEqualTheReferenceSums) {
   int compared = 0;
-  const double worst = worst_frame_terms_difference<double>(compared);
+  const double worst = worst_frame_terms_difference<double>(compared, GetParam());
   std::printf("double lanes, %d quadrics: worst relative difference %.2e\n", compared, worst);
   EXPECT_GT(compared, 1000);
   EXPECT_LT(worst, 1e-11);  // the same sums in another order: rounding only (measured 2e-13)
 }
 
-TEST(GatheredFrameTerms, FloatLanesMatchTheReferenceSumsToFloatRounding) {
+TEST_P(GatheredFrameTerms, FloatLanesMatchTheReferenceSumsToFloatRounding) {
   int compared = 0;
-  const double worst = worst_frame_terms_difference<float>(compared);
+  const double worst = worst_frame_terms_difference<float>(compared, GetParam());
   std::printf("float lanes, %d quadrics: worst relative difference %.2e\n", compared, worst);
   EXPECT_GT(compared, 1000);
   // Float rounding (6e-8) of the centred coordinates and of ~100 products per sum (measured
   // 3e-7 against the terms' scale).
   EXPECT_LT(worst, 1e-5);
 }
+
+INSTANTIATE_TEST_SUITE_P(LeverArms, GatheredFrameTerms, ::testing::Values(0.0f, 0.2f));
 
 }  // namespace
 }  // namespace jpcr

@@ -65,6 +65,73 @@ TEST(JointPixelKernel, FrameTwoJacobiansMatchCentralDifferences) {
   EXPECT_GT(checked, 2000);
 }
 
+// The lever arms at the foot points (ray_foot_jacobians): on a planar quadric (a = b = c = 0)
+// the frame-2 Jacobians are −(g_w·u) times the derivatives of the distance t* along the unit
+// ray u from the sample to the surface, with the ray moving with the pose (it starts at camera
+// 2's centre) — the distance that a range error along the ray does not change. Checked for the
+// pose, the tilt and the offset t_z (the curvature entries stay at the sample); noisy frames so
+// that r ≠ 0 and the foot points differ from the samples.
+TEST(JointPixelKernel, RayFootJacobiansAreTheDerivativesOfTheDistanceAlongTheRay) {
+  const JointTestWindow w = render_window(2, 320, "range:1");
+  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  JointParams joint;
+  joint.ray_min_cosine = 0.2f;
+  const JointTermParams params = joint.terms(true);
+  const PinholeProjection cam{w.camera.fx, w.camera.fy, w.camera.cx, w.camera.cy};
+  const VertexView view2{w.vertices[1].data(), w.vertices[1].width(), w.vertices[1].height()};
+  const Eigen::Isometry3d T = perturbed(w.truth[1], 0.01, 1.0);
+  const double h = 1e-6;
+  int checked = 0, moved = 0;
+  for (int v = 20; v < w.camera.height; v += 37) {
+    for (int u = 20; u < w.camera.width; u += 41) {
+      if (!map.valid(u, v)) continue;
+      Quadricd q = map.quadrics(u, v).cast<double>();
+      q.R = orthonormalize(q.R);
+      q.a = q.b = q.c = 0.0;
+      q.t_z += 2e-3;
+      int su = 0, sv = 0;
+      if (!associate(q.center, motion(T), view2, cam, params, su, sv)) continue;
+      for (const PixelOffset& o : pattern.offsets) {
+        if (!view2.in_bounds(su + o.du, sv + o.dv)) continue;
+        const Eigen::Vector3d Q = view2(su + o.du, sv + o.dv).cast<double>();
+        if (!std::isfinite(Q.z())) continue;
+        const Eigen::Vector3d X = T * Q;
+        const QuadricLinearization<double> l = linearize_quadric(q, X);
+        const Eigen::Vector3d origin = q.R * (q.center - T.translation());
+        Vector6d J_gamma, J_xi;
+        ray_foot_jacobians(q, l, origin, params.ray_min_cos2<double>(), J_gamma, J_xi);
+        // t*(pose, quadric): r is affine along the ray on a plane, so t* = −r(X) / (g_w·u).
+        const auto distance = [&Q](const Eigen::Isometry3d& pose, const Quadricd& quadric) {
+          const Eigen::Vector3d Xp = pose * Q;
+          const Eigen::Vector3d ray = (Xp - pose.translation()).normalized();
+          const QuadricLinearization<double> lp = linearize_quadric(quadric, Xp);
+          return -lp.r / (quadric.R.transpose() * lp.g).dot(ray);
+        };
+        const double c = (q.R.transpose() * l.g).dot((X - T.translation()).normalized());
+        if (std::abs(c) < 0.3 * l.g.norm()) continue;  // near grazing the foot point is not used
+        moved += std::abs(l.r) > 1e-3 ? 1 : 0;
+        for (int i = 0; i < 6; ++i) {
+          const Vector6d e = Vector6d::Unit(i) * h;
+          const double d_xi =
+              (distance(se3_exp(e) * T, q) - distance(se3_exp(-e) * T, q)) / (2 * h);
+          EXPECT_NEAR(J_xi(i), -c * d_xi, 1e-7 * (1 + std::abs(c * d_xi))) << "xi " << i;
+          if (i > 2) continue;  // tilt and offset
+          Quadricd qp = q, qm = q;
+          apply_quadric_update(qp, QuadricVector<double>(e));
+          apply_quadric_update(qm, QuadricVector<double>(-e));
+          const double d_gamma = (distance(T, qp) - distance(T, qm)) / (2 * h);
+          EXPECT_NEAR(J_gamma(i), -c * d_gamma, 1e-7 * (1 + std::abs(c * d_gamma)))
+              << "gamma " << i;
+        }
+        ++checked;
+      }
+    }
+  }
+  EXPECT_GT(checked, 2000);
+  EXPECT_GT(moved, checked / 4);  // most samples are off the surface by more than 1 mm
+}
+
 // The same through the kernel's sums: with the association and the weights fixed,
 // g_xi = ½ ∂/∂ξ Σ w r², g_gamma = ½ ∂/∂γ Σ w r² and B = Σ w J_ξ J_γᵀ of the numeric Jacobians.
 TEST(JointPixelKernel, FrameTermSumsMatchNumericJacobians) {
@@ -85,8 +152,10 @@ TEST(JointPixelKernel, FrameTermSumsMatchNumericJacobians) {
       if (!associate(q.center, motion(T), view2, cam, params, su, sv)) continue;
       const SampleGate<double> limits = SampleGate<double>::at(params.fit, q.center);
       FrameTerms<double> f;
-      accumulate_frame_terms(q, view2, motion(T), true, pattern.offsets.data(), pattern.size(), su,
-                             sv, limits, f);
+      // The lever arms at the samples: the exact derivatives of Σ w r² (the foot points are
+      // checked in RayFootJacobiansAreTheDerivativesOfTheDistanceAlongTheRay).
+      accumulate_frame_terms(q, view2, motion(T), true, kNoRayFoot, pattern.offsets.data(),
+                             pattern.size(), su, sv, limits, f);
       if (f.count < params.min_frame_terms) continue;
       // Numeric Jacobian rows of the gated samples, weights frozen at the linearisation point.
       Matrix6d B = Matrix6d::Zero();
@@ -169,8 +238,8 @@ DenseStep dense_step(const JointTestWindow& w, const JointState& state, const Jo
         if (!active[k].second.seen[j - 1]) continue;
         EXPECT_TRUE(associate(q.center, motions[j], views[j], window.camera, p, su, sv));
       }
-      accumulate_frame_terms(q, views[j], motions[j], j > 0, pattern.offsets.data(), pattern.size(),
-                             su, sv, limits, f);
+      accumulate_frame_terms(q, views[j], motions[j], j > 0, p.ray_min_cos2<double>(),
+                             pattern.offsets.data(), pattern.size(), su, sv, limits, f);
       const Matrix6d C = f.C.selfadjointView<Eigen::Lower>();
       H.block<6, 6>(col, col) += C;
       g.segment<6>(col) += f.g_gamma;
