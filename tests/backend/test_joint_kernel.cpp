@@ -19,6 +19,30 @@ using test::motion;
 using test::perturbed;
 using test::render_window;
 
+// Calls body(q, Q) for every valid frame-2 sample Q of every quadric q on a 41 x 37 px grid of
+// frame 1's valid pixels (q first changed by `adjust`) that projects into frame 2 at pose T.
+template <typename Adjust, typename Body>
+void for_each_frame_two_sample(const JointTestWindow& w, const QuadricMap& map,
+                               const NeighbourhoodPattern& pattern, const JointTermParams& params,
+                               const Eigen::Isometry3d& T, Adjust&& adjust, Body&& body) {
+  const PinholeProjection cam{w.camera.fx, w.camera.fy, w.camera.cx, w.camera.cy};
+  const VertexView view2{w.vertices[1].data(), w.vertices[1].width(), w.vertices[1].height()};
+  for (int v = 20; v < w.camera.height; v += 37) {
+    for (int u = 20; u < w.camera.width; u += 41) {
+      if (!map.valid(u, v)) continue;
+      Quadricd q = map.quadrics(u, v).cast<double>();
+      adjust(q);
+      int su = 0, sv = 0;
+      if (!associate(q.center, motion(T), view2, cam, params, su, sv)) continue;
+      for (const PixelOffset& o : pattern.offsets) {
+        if (!view2.in_bounds(su + o.du, sv + o.dv)) continue;
+        const Eigen::Vector3d Q = view2(su + o.du, sv + o.dv).cast<double>();
+        if (std::isfinite(Q.z())) body(q, Q);
+      }
+    }
+  }
+}
+
 // The residual of a fixed frame-2 sample Q as a function of the pose and the quadric:
 // r(exp(ξ^) T Q; γ ⊕ Δγ). Central differences with h = 1e-6 have truncation error ~h² |r'''|
 // and rounding error ~1e-16 / h; both stay below 1e-8 of the derivatives here.
@@ -27,22 +51,14 @@ TEST(JointPixelKernel, FrameTwoJacobiansMatchCentralDifferences) {
   const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
   const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
   const JointTermParams params = JointParams{}.terms(true);
-  const PinholeProjection cam{w.camera.fx, w.camera.fy, w.camera.cx, w.camera.cy};
-  const VertexView view2{w.vertices[1].data(), w.vertices[1].width(), w.vertices[1].height()};
   const Eigen::Isometry3d T = perturbed(w.truth[1], 0.01, 1.0);
   const double h = 1e-6;
   int checked = 0;
-  for (int v = 20; v < w.camera.height; v += 37) {
-    for (int u = 20; u < w.camera.width; u += 41) {
-      if (!map.valid(u, v)) continue;
-      Quadricd q = map.quadrics(u, v).cast<double>();
-      q.a += 0.7, q.b -= 0.3, q.c += 0.4, q.t_z += 1e-3;  // curved, so every term is exercised
-      int su = 0, sv = 0;
-      if (!associate(q.center, motion(T), view2, cam, params, su, sv)) continue;
-      for (const PixelOffset& o : pattern.offsets) {
-        if (!view2.in_bounds(su + o.du, sv + o.dv)) continue;
-        const Eigen::Vector3d Q = view2(su + o.du, sv + o.dv).cast<double>();
-        if (!std::isfinite(Q.z())) continue;
+  const auto curved = [](Quadricd& q) {  // curved, so every term is exercised
+    q.a += 0.7, q.b -= 0.3, q.c += 0.4, q.t_z += 1e-3;
+  };
+  for_each_frame_two_sample(
+      w, map, pattern, params, T, curved, [&](const Quadricd& q, const Eigen::Vector3d& Q) {
         const Eigen::Vector3d X = T * Q;
         const QuadricLinearization<double> l = linearize_quadric(q, X);
         const Vector6d J_xi = quadric_pose_jacobian(q, l, X);
@@ -59,9 +75,7 @@ TEST(JointPixelKernel, FrameTwoJacobiansMatchCentralDifferences) {
           EXPECT_NEAR(l.J(i), d_gamma, 1e-8 * (1 + std::abs(d_gamma))) << "gamma " << i;
         }
         ++checked;
-      }
-    }
-  }
+      });
   EXPECT_GT(checked, 2000);
 }
 
@@ -78,24 +92,16 @@ TEST(JointPixelKernel, RayFootJacobiansAreTheDerivativesOfTheDistanceAlongTheRay
   JointParams joint;
   joint.ray_min_cosine = 0.2f;
   const JointTermParams params = joint.terms(true);
-  const PinholeProjection cam{w.camera.fx, w.camera.fy, w.camera.cx, w.camera.cy};
-  const VertexView view2{w.vertices[1].data(), w.vertices[1].width(), w.vertices[1].height()};
   const Eigen::Isometry3d T = perturbed(w.truth[1], 0.01, 1.0);
   const double h = 1e-6;
   int checked = 0, moved = 0;
-  for (int v = 20; v < w.camera.height; v += 37) {
-    for (int u = 20; u < w.camera.width; u += 41) {
-      if (!map.valid(u, v)) continue;
-      Quadricd q = map.quadrics(u, v).cast<double>();
-      q.R = orthonormalize(q.R);
-      q.a = q.b = q.c = 0.0;
-      q.t_z += 2e-3;
-      int su = 0, sv = 0;
-      if (!associate(q.center, motion(T), view2, cam, params, su, sv)) continue;
-      for (const PixelOffset& o : pattern.offsets) {
-        if (!view2.in_bounds(su + o.du, sv + o.dv)) continue;
-        const Eigen::Vector3d Q = view2(su + o.du, sv + o.dv).cast<double>();
-        if (!std::isfinite(Q.z())) continue;
+  const auto planar = [](Quadricd& q) {
+    q.R = orthonormalize(q.R);
+    q.a = q.b = q.c = 0.0;
+    q.t_z += 2e-3;
+  };
+  for_each_frame_two_sample(
+      w, map, pattern, params, T, planar, [&](const Quadricd& q, const Eigen::Vector3d& Q) {
         const Eigen::Vector3d X = T * Q;
         const QuadricLinearization<double> l = linearize_quadric(q, X);
         const Eigen::Vector3d origin = q.R * (q.center - T.translation());
@@ -109,7 +115,7 @@ TEST(JointPixelKernel, RayFootJacobiansAreTheDerivativesOfTheDistanceAlongTheRay
           return -lp.r / (quadric.R.transpose() * lp.g).dot(ray);
         };
         const double c = (q.R.transpose() * l.g).dot((X - T.translation()).normalized());
-        if (std::abs(c) < 0.3 * l.g.norm()) continue;  // near grazing the foot point is not used
+        if (std::abs(c) < 0.3 * l.g.norm()) return;  // near grazing the foot point is not used
         moved += std::abs(l.r) > 1e-3 ? 1 : 0;
         for (int i = 0; i < 6; ++i) {
           const Vector6d e = Vector6d::Unit(i) * h;
@@ -125,9 +131,7 @@ TEST(JointPixelKernel, RayFootJacobiansAreTheDerivativesOfTheDistanceAlongTheRay
               << "gamma " << i;
         }
         ++checked;
-      }
-    }
-  }
+      });
   EXPECT_GT(checked, 2000);
   EXPECT_GT(moved, checked / 4);  // most samples are off the surface by more than 1 mm
 }
