@@ -51,6 +51,9 @@ struct RefinementReport {
   long terms = 0;                  // residual terms inside the gate at the end
   std::vector<int> isolated;       // icp-bundle: frames (window index) left as given
   double residual_variance = 0.0;  // m²: final cost / (terms − unknowns)
+  /// Terms per distinct sample (terms / (active quadrics + Σ seen), about the number of
+  /// neighbourhoods each sample falls in): the factor by which the covariance is inflated.
+  double sample_reuse = 0.0;
   double damping = 0.0;            // λ at the end
   /// λmin / λmax of the reduced pose system S made unit-free (each pose's ω block scaled by
   /// √(tr S_vv / tr S_ωω), as the front end's IcpResult::degeneracy): 1 is perfectly
@@ -64,7 +67,10 @@ struct RefinementReport {
 struct RefinementResult {
   std::vector<Eigen::Isometry3d> poses;  // T_1 = I, T_2 … T_M (frame j → frame 1)
   QuadricMap quadrics;                   // the reference frame's quadrics, curvature recomputed
-  std::vector<Matrix6d> covariance;  // per pose, (v, ω) order: σ² S⁻¹ blocks; [0] = 0 (gauge)
+  /// Per pose, (v, ω) order, of the left update T ← exp(ξ^) T: the blocks of reuse · σ² S⁻¹
+  /// (RefinementReport::sample_reuse, residual_variance); [0] = 0 (the gauge). Zero blocks when
+  /// S is degenerate. It describes the spread of the estimate under sensor noise, not its bias.
+  std::vector<Matrix6d> covariance;
   RefinementReport report;
 };
 

@@ -25,6 +25,7 @@ void write_refinement(JsonWriter& json, const char* name,
       .field("cost", r->cost)
       .field("active_quadrics", r->active_quadrics)
       .field("residual_variance", r->residual_variance)
+      .field("sample_reuse", r->sample_reuse)  // the covariance's inflation (refiner.hpp)
       .field("degeneracy", r->degeneracy)
       .field("isolated_frames",  // icp-bundle: window frames left as given (no overlap)
              std::vector<double>(r->isolated.begin(), r->isolated.end()))
