@@ -4,6 +4,7 @@
 #include <chrono>
 #include <stdexcept>
 
+#include "jpcr/frontend/frame_pyramid.hpp"
 #include "jpcr/quadric/error.hpp"
 #include "jpcr/quadric/quadric_fit.hpp"
 #include "jpcr/quadric/se3.hpp"
@@ -189,6 +190,8 @@ void PipelineBackEnd::on_keyframe(const Frame& frame, const PipelineFrame& track
   if (!window_refiner_ || keyframe_count() == 1) final_keyframes_ = keyframe_count();
   if (!pair_refiner_ && !window_refiner_) return;  // ICP-ftf: nothing to refine or keep
   window_->frames.push_back(frame);
+  if (params_.filtered_depth)
+    window_->frames.back().depth = bilateral_filter(frame.depth, params_.frontend.preprocess);
   window_->keyframes.push_back(static_cast<int>(keyframe_count()) - 1);
   window_->quadrics.emplace_back();
   window_->sources.emplace_back();

@@ -21,11 +21,14 @@ from numpy.lib.stride_tricks import sliding_window_view
 SCENES = ["room_spheres", "cylinders_boxes", "torus_saddle"]
 NOISES = [0, 1, 2, 3]
 POSE_METHODS = ["icp-ftf", "icp-bundle", "q-full", "j-ftf", "j-full"]
+# Not the paper's: the joint refiners on the bilateral-filtered depth (pipeline.filtered_depth).
+FILTERED_METHODS = ["j-ftf-filtered", "j-full-filtered"]
 CURVATURE_METHODS = ["quad_ls", "quad_it", "j-ftf", "j-full"]
 CURVATURE_COLUMNS = CURVATURE_METHODS + ["quad_jet"]  # and the peer: CGAL Monge jet fitting
 LABEL = {"icp-ftf": "ICP-ftf", "icp-bundle": "ICP-bundle", "q-full": "Q-full", "j-ftf": "J-ftf",
          "j-full": "J-full", "quad_ls": "Quad LS", "quad_it": "Quad IT", "pipeline": "pipeline",
-         "quad_jet": "CGAL jet (peer)"}
+         "quad_jet": "CGAL jet (peer)", "j-ftf-filtered": "J-ftf, filtered depth",
+         "j-full-filtered": "J-full, filtered depth"}
 
 # The paper's Tables I-III (synthetic Datasets 1-3): RMS translation (m) and rotation (rad) per
 # noise level 0..3 % and method (ICP-ftf, ICP-bundle, Q-full, J-ftf, J-full). Our scenes are not
@@ -66,10 +69,15 @@ def noise_rules(runs):
             text = open(os.path.join(runs, f"params_{role}_range1.yaml")).read()
         except OSError:
             continue
-        found = dict(re.findall(r"(fair_n0_per_range|gate_per_range):\s*([0-9.eE+-]+)", text))
-        if len(found) == 2:
-            rules.append(f"{who} n₀ = {found['fair_n0_per_range']} and gate = "
-                         f"{found['gate_per_range']} m per m")
+        found = dict(re.findall(
+            r"(fair_n0_per_range|gate_per_range|bilateral_sigma_depth):\s*([0-9.eE+-]+)", text))
+        if "fair_n0_per_range" in found and "gate_per_range" in found:
+            rule = (f"{who} n₀ = {found['fair_n0_per_range']} and gate = "
+                    f"{found['gate_per_range']} m per m")
+            if "bilateral_sigma_depth" in found:
+                rule += (f", the front end's (ICP-ftf's) bilateral depth filter at σ = "
+                         f"{found['bilateral_sigma_depth']} m")
+            rules.append(rule)
     return rules
 
 
@@ -314,9 +322,10 @@ def main():
     pose = {}
     for s in SCENES:
         for k in NOISES:
-            for m in POSE_METHODS:
+            for m in POSE_METHODS + FILTERED_METHODS:
                 pose[s, k, m] = pose_errors(os.path.join(a.runs, s, f"range{k}", m))
     present = [m for m in POSE_METHODS if any(pose[s, k, m] for s in SCENES for k in NOISES)]
+    filtered = [m for m in FILTERED_METHODS if any(pose[s, k, m] for s in SCENES for k in NOISES)]
     complete = sum(all(pose[s, k, m] for m in present) for s in SCENES for k in NOISES)
     if complete < len(SCENES) * len(NOISES):
         w(f"> **Incomplete run**: {complete} of {len(SCENES) * len(NOISES)} scene × noise cells "
@@ -336,27 +345,44 @@ def main():
       "in rad, per range-noise level σ = k % of the range. ICP-ftf, J-ftf: consecutive frames; "
       "J-full, Q-full, ICP-bundle: sliding windows. Our three scenes stand beside the paper's "
       "Datasets 1–3 by order; the scenes differ, so compare ratios, not absolute values.\n")
-    ratios_ftf, ratios_bundle = [], []
+    if filtered:
+        w("At k > 0 ICP-ftf tracks the depth after a bilateral filter matched to the noise (its "
+          "normals are noise without it: it rejects every alignment at 2 % and 3 %), and every "
+          "other method starts from it. The paper's methods refine the raw depth; the columns "
+          "'filtered depth' (not in the paper) are J-ftf and J-full refining the same filtered "
+          "depth as ICP-ftf (`pipeline.filtered_depth`, README \"Range noise\").\n")
+    ratios_ftf, ratios_bundle, ratios_filtered = [], [], []
     for i, s in enumerate(SCENES):
         paper = PAPER[f"Dataset {i + 1}"]
         for kind, unit in [("t", "translation (m)"), ("r", "rotation (rad)")]:
             w(f"### {s}: {unit} — ours vs paper Dataset {i + 1}\n")
-            head = " | ".join(f"{LABEL[m]}" for m in present)
+            head = " | ".join(f"{LABEL[m]}" for m in present + filtered)
             phead = " | ".join(f"{LABEL[m]} (paper)" for m in POSE_METHODS)
-            w(f"| noise | {head} | {phead} | ICP-ftf / J-ftf (ours) | (paper) |")
-            w("|" + "---|" * (len(present) + len(POSE_METHODS) + 3))
+            fhead = " | ICP-ftf / J-ftf, filtered depth" if filtered else ""
+            w(f"| noise | {head} | {phead} | ICP-ftf / J-ftf (ours){fhead} | (paper) |")
+            w("|" + "---|" * (len(present) + len(filtered) + len(POSE_METHODS) + 3 +
+                              (1 if filtered else 0)))
             for k in NOISES:
-                ours = [pose[s, k, m][kind] if pose[s, k, m] else None for m in present]
+                ours = [pose[s, k, m][kind] if pose[s, k, m] else None for m in present + filtered]
                 ratio = None
                 if pose[s, k, "icp-ftf"] and pose[s, k, "j-ftf"] and pose[s, k, "j-ftf"][kind]:
                     ratio = pose[s, k, "icp-ftf"][kind] / pose[s, k, "j-ftf"][kind]
                     if kind == "t":
                         ratios_ftf.append(ratio)
+                fratio = ""
+                if filtered:
+                    f = pose[s, k, "j-ftf-filtered"]
+                    fr = pose[s, k, "icp-ftf"][kind] / f[kind] if (
+                        f and f[kind] and pose[s, k, "icp-ftf"]) else None
+                    fratio = f" | {fmt(fr, '.1f')}x" if fr else " | –"
+                    if fr and kind == "t":
+                        ratios_filtered.append(fr)
                 if kind == "t" and pose[s, k, "icp-bundle"] and pose[s, k, "j-full"]:
                     ratios_bundle.append((s, k, pose[s, k, "j-full"]["t"] / pose[s, k, "icp-bundle"]["t"]))
                 pr = paper[kind][k][0] / paper[kind][k][3]
                 w(f"| {k} % | " + " | ".join(fmt(x) for x in ours) + " | " +
-                  " | ".join(fmt(x) for x in paper[kind][k]) + f" | {fmt(ratio, '.1f')}x | {pr:.1f}x |")
+                  " | ".join(fmt(x) for x in paper[kind][k]) +
+                  f" | {fmt(ratio, '.1f')}x{fratio} | {pr:.1f}x |")
             w("")
 
     # Curvature.
@@ -645,6 +671,10 @@ def main():
         w(f"- **J-ftf vs ICP-ftf** (paper: about an order of magnitude, 5–97x in translation): "
           f"ours {min(ratios_ftf):.1f}x – {max(ratios_ftf):.1f}x, J-ftf lower in {beat} of "
           f"{len(ratios_ftf)} scene × noise cells.")
+    if ratios_filtered:
+        w(f"- **J-ftf on the filtered depth vs ICP-ftf** (not in the paper; both on the same "
+          f"filtered depth): {min(ratios_filtered):.1f}x – {max(ratios_filtered):.1f}x, lower in "
+          f"{sum(r > 1 for r in ratios_filtered)} of {len(ratios_filtered)} noisy cells.")
     if ratios_bundle:
         better = [f"{s} {k} %" for s, k, r in ratios_bundle if r < 1]
         w(f"- **J-full vs ICP-bundle** (paper: 4–60 % better in translation): J-full / ICP-bundle "
@@ -672,15 +702,17 @@ def main():
     if not a.quick:
         return 0
     # --quick is CI's check of this script and of the orderings it measured to hold at the quick
-    # sizes (J-ftf below ICP-ftf and J-full below ICP-bundle in translation, every cell). The
-    # curvature order is reported, not checked: it does not hold (see the claims above).
+    # sizes: J-ftf below ICP-ftf in translation on the noise-free cells, and J-full below
+    # ICP-bundle in every cell. Under noise at 160x120 J-ftf is not below the noise-matched
+    # ICP-ftf (1 %, room_spheres: 2.22e-3 against 1.94e-3 m), so those cells are reported, not
+    # checked; nor is the curvature order (it does not hold, see the claims above).
     problems = []
     if complete < len(SCENES) * len(NOISES):
         problems.append(f"{complete} of {len(SCENES) * len(NOISES)} pose cells complete")
-    problems += [f"J-ftf not below ICP-ftf: {s} {k} %"
-                 for s in SCENES for k in NOISES
-                 if pose[s, k, "icp-ftf"] and pose[s, k, "j-ftf"]
-                 and not pose[s, k, "j-ftf"]["t"] < pose[s, k, "icp-ftf"]["t"]]
+    problems += [f"J-ftf not below ICP-ftf: {s} 0 %"
+                 for s in SCENES
+                 if pose[s, 0, "icp-ftf"] and pose[s, 0, "j-ftf"]
+                 and not pose[s, 0, "j-ftf"]["t"] < pose[s, 0, "icp-ftf"]["t"]]
     problems += [f"J-full not below ICP-bundle: {s} {k} %" for s, k, r in ratios_bundle if r >= 1]
     if cells < len(SCENES) * len(NOISES):
         problems.append(f"{cells} of {len(SCENES) * len(NOISES)} curvature cells complete")
@@ -700,7 +732,7 @@ def main():
         print(f"reproduce_report: --quick check failed: {p}", file=sys.stderr)
     if not problems:
         print(f"reproduce_report: --quick check passed: every section present; J-ftf below "
-              f"ICP-ftf in {len(ratios_ftf)} of {len(ratios_ftf)} cells, J-full below ICP-bundle "
+              f"ICP-ftf in the {len(SCENES)} noise-free cells, J-full below ICP-bundle "
               f"in {len(ratios_bundle)} of {len(ratios_bundle)}", file=sys.stderr)
     return 1 if problems else 0
 

@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "jpcr/backend/pipeline_back_end.hpp"
+#include "jpcr/frontend/frame_pyramid.hpp"
 
 namespace jpcr {
 namespace {
@@ -53,6 +54,30 @@ std::unique_ptr<Refiner> shifting(const std::string& name, const JointParams&,
   return std::make_unique<ShiftingRefiner>(
       name, name == "j-ftf" ? Eigen::Vector3d(1e-3, 0, 0) : Eigen::Vector3d(0, 2e-3, -1e-3));
 }
+
+// Wraps a refiner and records the depth of every frame it is given.
+class RecordingRefiner : public Refiner {
+ public:
+  RecordingRefiner(std::unique_ptr<Refiner> inner, std::vector<DepthImage>* seen)
+      : inner_(std::move(inner)), seen_(seen) {}
+  RefinementResult refine(const std::vector<Frame>& frames,
+                          const std::vector<Eigen::Isometry3d>& initial) const override {
+    for (const Frame& f : frames)
+      seen_->push_back(f.depth);
+    return inner_->refine(frames, initial);
+  }
+  RefinementResult refine(const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
+                          const std::vector<Eigen::Isometry3d>& initial,
+                          const QuadricMap& quadrics) const override {
+    return inner_->refine(vertices, camera, initial, quadrics);
+  }
+  std::string name() const override { return inner_->name(); }
+  const JointParams& params() const override { return inner_->params(); }
+
+ private:
+  std::unique_ptr<Refiner> inner_;
+  std::vector<DepthImage>* seen_;
+};
 
 struct Emitted {
   int index = 0;
@@ -230,6 +255,45 @@ TEST(PipelineHistory, ALateSinkReceivesWhatIsAlreadyFinal) {
     EXPECT_EQ(f.index, seen++);
   });
   EXPECT_EQ(seen, 3);
+}
+
+// pipeline.filtered_depth: the refiners receive each keyframe's depth after the front end's
+// bilateral filter, bit for bit, and the raw depth without it.
+TEST(PipelineHistory, FilteredDepthGivesTheRefinersTheFrontEndsBilateralFilter) {
+  Frame keyframe;
+  keyframe.camera.width = 40;
+  keyframe.camera.height = 30;
+  keyframe.depth = DepthImage(40, 30);
+  for (int v = 0; v < 30; ++v)
+    for (int u = 0; u < 40; ++u)  // a slope with a deterministic ±1 cm ripple and a hole
+      keyframe.depth(u, v) = (u == 7 && v == 9) ? 0.0f : 1.5f + 0.01f * u + 0.01f * ((u * 7 + v * 3) % 3 - 1);
+  for (const bool filtered : {false, true}) {
+    PipelineParams p;
+    p.method = PipelineMethod::kJointFtf;
+    p.filtered_depth = filtered;
+    p.frontend.preprocess.bilateral_sigma_depth = 0.03f;
+    std::vector<DepthImage> seen;
+    const RefinerFactory recording = [&seen](const std::string& name, const JointParams& j,
+                                             const IcpBundleParams& b) {
+      return std::make_unique<RecordingRefiner>(shifting(name, j, b), &seen);
+    };
+    PipelineBackEnd back_end(p, CurvatureSink{}, recording);
+    for (int i = 0; i < 2; ++i) {
+      PipelineFrame f;
+      f.index = i;
+      back_end.add(f, &keyframe);
+    }
+    const DepthImage expected =
+        filtered ? bilateral_filter(keyframe.depth, p.frontend.preprocess) : keyframe.depth;
+    ASSERT_EQ(seen.size(), 2u);
+    for (const DepthImage& d : seen) {
+      ASSERT_EQ(d.width(), 40);
+      EXPECT_TRUE(std::equal(d.data(), d.data() + 40 * 30, expected.data()));
+    }
+    // The filter changed the depth (else the test would not tell the two apart).
+    EXPECT_FALSE(std::equal(expected.data(), expected.data() + 40 * 30, keyframe.depth.data()) &&
+                 filtered);
+  }
 }
 
 }  // namespace
