@@ -54,7 +54,7 @@ struct RefinementReport {
   /// Terms per distinct sample (terms / (active quadrics + Σ seen), about the number of
   /// neighbourhoods each sample falls in): the factor by which the covariance is inflated.
   double sample_reuse = 0.0;
-  double damping = 0.0;            // λ at the end
+  double damping = 0.0;  // λ at the end
   /// λmin / λmax of the reduced pose system S made unit-free (each pose's ω block scaled by
   /// √(tr S_vv / tr S_ωω), as the front end's IcpResult::degeneracy): 1 is perfectly
   /// conditioned, 0 unobservable; below JointParams::degeneracy_threshold the verdict is

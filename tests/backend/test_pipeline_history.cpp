@@ -266,7 +266,8 @@ TEST(PipelineHistory, FilteredDepthGivesTheRefinersTheFrontEndsBilateralFilter) 
   keyframe.depth = DepthImage(40, 30);
   for (int v = 0; v < 30; ++v)
     for (int u = 0; u < 40; ++u)  // a slope with a deterministic ±1 cm ripple and a hole
-      keyframe.depth(u, v) = (u == 7 && v == 9) ? 0.0f : 1.5f + 0.01f * u + 0.01f * ((u * 7 + v * 3) % 3 - 1);
+      keyframe.depth(u, v) =
+          (u == 7 && v == 9) ? 0.0f : 1.5f + 0.01f * u + 0.01f * ((u * 7 + v * 3) % 3 - 1);
   for (const bool filtered : {false, true}) {
     PipelineParams p;
     p.method = PipelineMethod::kJointFtf;
