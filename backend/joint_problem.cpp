@@ -71,6 +71,7 @@ void finish_report(const ReducedSystem& lin, bool estimate_quadrics, RefinementR
       r.sample_reuse * r.residual_variance * ldlt.solve(Eigen::MatrixXd::Identity(n, n));
   for (int j = 0; j < n / 6; ++j)
     out.covariance[static_cast<std::size_t>(j) + 1] = cov.block<6, 6>(6 * j, 6 * j);
+  out.joint_covariance = cov;
 }
 
 // The refined quadrics; one that fits fewer than min_samples of its own samples of the
@@ -187,6 +188,7 @@ RefinementResult run_joint_refinement(JointProblem& problem, const JointParams& 
     report.verdict = RefinementVerdict::kDegenerate;
   const JointState& state = problem.state();
   out.poses = state.poses;
+  report_pose_spread(out);
   out.quadrics = refined_map(initial_quadrics, state, reference, params, estimate_quadrics);
   return out;
 }

@@ -1,5 +1,7 @@
 #include "jpcr/backend/refiner.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <stdexcept>
 
 #include "jpcr/backend/fixed_quadric_alignment.hpp"
@@ -21,6 +23,46 @@ bool same_camera(const CameraIntrinsics& a, const CameraIntrinsics& b) {
 }
 
 }  // namespace
+
+PoseSpread pose_spread(const Matrix6d& covariance, const Eigen::Isometry3d& pose) {
+  Eigen::Matrix<double, 3, 6> J;  // δt = [I, −[t]×] ξ
+  J.leftCols<3>().setIdentity();
+  J.rightCols<3>() = -skew(pose.translation());
+  const double tt = (J * covariance * J.transpose()).trace();
+  const double rr = covariance.bottomRightCorner<3, 3>().trace();
+  return {std::sqrt(std::max(0.0, tt)), std::sqrt(std::max(0.0, rr))};
+}
+
+void report_pose_spread(RefinementResult& result) {
+  RefinementReport& r = result.report;
+  const std::vector<Eigen::Isometry3d>& T = result.poses;
+  r.translation_sd.clear();
+  r.rotation_sd.clear();
+  r.step_translation_sd.clear();
+  r.step_rotation_sd.clear();
+  for (std::size_t j = 1; j < T.size() && j < result.covariance.size(); ++j) {
+    const PoseSpread s = pose_spread(result.covariance[j], T[j]);
+    r.translation_sd.push_back(s.translation_m);
+    r.rotation_sd.push_back(s.rotation_rad);
+  }
+  const Eigen::MatrixXd& joint = result.joint_covariance;
+  const Eigen::Index m = static_cast<Eigen::Index>(T.size()) - 1;  // poses after the gauge
+  if (m < 1 || joint.rows() != 6 * m || joint.cols() != 6 * m) return;
+  for (Eigen::Index j = 1; j <= m; ++j) {
+    // Σ of η = ξ_j − ξ_{j−1}; pose k sits at rows 6 (k − 1) of the joint covariance.
+    Matrix6d eta = joint.block<6, 6>(6 * (j - 1), 6 * (j - 1));
+    if (j > 1) {
+      const Eigen::Index a = 6 * (j - 2), b = 6 * (j - 1);
+      eta += joint.block<6, 6>(a, a) - joint.block<6, 6>(a, b) - joint.block<6, 6>(b, a);
+    }
+    const Eigen::Isometry3d previous_inverse = T[static_cast<std::size_t>(j - 1)].inverse();
+    const Matrix6d Ad = se3_adjoint(previous_inverse);
+    const PoseSpread s =
+        pose_spread(Ad * eta * Ad.transpose(), previous_inverse * T[static_cast<std::size_t>(j)]);
+    r.step_translation_sd.push_back(s.translation_m);
+    r.step_rotation_sd.push_back(s.rotation_rad);
+  }
+}
 
 std::vector<VertexMap> window_vertex_maps(const std::vector<Frame>& frames,
                                           const std::string& method) {

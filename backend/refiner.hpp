@@ -60,6 +60,14 @@ struct RefinementReport {
   /// conditioned, 0 unobservable; below JointParams::degeneracy_threshold the verdict is
   /// kDegenerate.
   double degeneracy = 0.0;
+  /// Per pose T_2 … T_M: the predicted RMS length of its translation error (m) and rotation
+  /// error (rad) against the reference frame, from RefinementResult::covariance (pose_spread);
+  /// empty where the refiner gives no covariance (icp-bundle), 0 where S is degenerate.
+  std::vector<double> translation_sd, rotation_sd;
+  /// The same for the steps T_1⁻¹T_2, T_2⁻¹T_3, …, T_{M−1}⁻¹T_M between successive frames, from
+  /// RefinementResult::joint_covariance (its cross terms): what a relative pose error metric
+  /// sees. For J-ftf the one step is the pose.
+  std::vector<double> step_translation_sd, step_rotation_sd;
 
   bool converged() const { return verdict == RefinementVerdict::kConverged; }
 };
@@ -71,8 +79,27 @@ struct RefinementResult {
   /// (RefinementReport::sample_reuse, residual_variance); [0] = 0 (the gauge). Zero blocks when
   /// S is degenerate. It describes the spread of the estimate under sensor noise, not its bias.
   std::vector<Matrix6d> covariance;
+  /// All poses T_2 … T_M jointly, 6(M−1) square (its diagonal blocks are `covariance`); empty
+  /// when unknown.
+  Eigen::MatrixXd joint_covariance;
   RefinementReport report;
 };
+
+/// The predicted RMS length of a pose's translation error (m) and rotation error (rad), from its
+/// 6x6 covariance in the left update T ← exp(ξ^) T, ξ = (v, ω): to first order the translation
+/// moves by δt = v + ω × t = [I, −[t]×] ξ, so its covariance is [I, −[t]×] Σ [I, −[t]×]ᵀ, and the
+/// RMS length of a zero-mean error is the square root of its covariance's trace.
+struct PoseSpread {
+  double translation_m = 0.0;
+  double rotation_rad = 0.0;
+};
+PoseSpread pose_spread(const Matrix6d& covariance, const Eigen::Isometry3d& pose);
+
+/// Fills the report's translation_sd / rotation_sd from result.covariance and result.poses, and
+/// step_translation_sd / step_rotation_sd from result.joint_covariance: the step
+/// T_{j−1}⁻¹ T_j moves, to first order, by the left update Ad(T_{j−1}⁻¹) (ξ_j − ξ_{j−1}) (ξ_1 = 0).
+
+void report_pose_spread(RefinementResult& result);
 
 class Refiner {
  public:

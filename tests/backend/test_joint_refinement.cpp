@@ -2,6 +2,7 @@
 // better than Quad IT under range noise, the gauge, and bad input.
 #include <cmath>
 #include <cstdio>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -158,6 +159,8 @@ TEST(JointFrameToFrame, CovarianceMatchesTheSpreadOverNoiseDraws) {
   const int draws = 16;
   std::vector<Vector6d> errors;
   Matrix6d predicted = Matrix6d::Zero();
+  std::vector<Eigen::Vector3d> translation_shift;  // of the pose's translation vector
+  double predicted_translation_sd = 0.0;           // report.translation_sd, averaged
   for (int seed = 11; seed < 11 + draws; ++seed) {
     const std::vector<VertexMap> vertices = walk.draw(seed);
     const QuadricMap initial = QuadricFit(params.quadric).estimate(vertices[0]);
@@ -167,6 +170,9 @@ TEST(JointFrameToFrame, CovarianceMatchesTheSpreadOverNoiseDraws) {
     EXPECT_GT(r.report.sample_reuse, 1.0);
     errors.push_back(walk.error(r.poses[1]));
     predicted += r.covariance[1] / draws;
+    ASSERT_EQ(r.report.translation_sd.size(), 1u);
+    translation_shift.push_back(r.poses[1].translation() - walk.relative.translation());
+    predicted_translation_sd += r.report.translation_sd[0] / draws;
   }
   Vector6d mean = Vector6d::Zero();
   for (const Vector6d& e : errors)
@@ -188,6 +194,101 @@ TEST(JointFrameToFrame, CovarianceMatchesTheSpreadOverNoiseDraws) {
     EXPECT_GT(ratio, 0.5) << "axis " << i;
     EXPECT_LT(ratio, 2.0) << "axis " << i;
   }
+  // The report's translation sd (report.json) predicts the RMS length of the translation's
+  // spread about its mean.
+  Eigen::Vector3d mean_shift = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& d : translation_shift)
+    mean_shift += d / draws;
+  double spread_t = 0.0;
+  for (const Eigen::Vector3d& d : translation_shift)
+    spread_t += (d - mean_shift).squaredNorm() / (draws - 1);
+  const double ratio_t = std::sqrt(spread_t) / predicted_translation_sd;
+  std::printf("translation: RMS spread / reported sd = %.2f\n", ratio_t);
+  EXPECT_GT(ratio_t, 0.5);
+  EXPECT_LT(ratio_t, 2.0);
+}
+
+// pose_spread against sampling: ξ ~ N(0, Σ) applied as exp(ξ^) T to a pose 1.5 m from the
+// reference (so the rotation's lever arm dominates the translation's spread), 20000 draws. The
+// estimates of an RMS from N draws have a relative sd near 1/√(2N) ≈ 0.5 %; Σ is small (mm,
+// mrad), so the first-order propagation is exact to about 1e-3; the bound is 3 %.
+TEST(PoseSpread, MatchesTheSpreadOfSampledLeftUpdates) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> normal;
+  Matrix6d L = Matrix6d::Zero();  // Σ = L Lᵀ, correlated, scaled to 1e-3
+  for (int i = 0; i < 6; ++i)
+    for (int j = 0; j <= i; ++j)
+      L(i, j) = 1e-3 * (i == j ? 1.0 + 0.2 * i : 0.3 * normal(rng));
+  const Matrix6d sigma = L * L.transpose();
+  Eigen::Isometry3d T = Eigen::Isometry3d::Identity();
+  T.linear() = so3_exp(Eigen::Vector3d(0.2, -0.4, 0.3));
+  T.translation() = Eigen::Vector3d(0.9, -0.6, 1.0);
+  const PoseSpread predicted = pose_spread(sigma, T);
+  const int n = 20000;
+  double sum_t = 0.0, sum_r = 0.0;
+  for (int k = 0; k < n; ++k) {
+    Vector6d z;
+    for (int i = 0; i < 6; ++i)
+      z(i) = normal(rng);
+    const Eigen::Isometry3d moved = se3_exp(L * z) * T;
+    sum_t += (moved.translation() - T.translation()).squaredNorm();
+    sum_r += so3_log(moved.linear() * T.linear().transpose()).squaredNorm();
+  }
+  const double sampled_t = std::sqrt(sum_t / n), sampled_r = std::sqrt(sum_r / n);
+  std::printf("translation %.4g m sampled, %.4g predicted; rotation %.4g rad, %.4g\n", sampled_t,
+              predicted.translation_m, sampled_r, predicted.rotation_rad);
+  EXPECT_NEAR(sampled_t / predicted.translation_m, 1.0, 0.03);
+  EXPECT_NEAR(sampled_r / predicted.rotation_rad, 1.0, 0.03);
+  // The lever arm matters here: √tr Σ_vv alone is about half of it.
+  EXPECT_GT(predicted.translation_m, 1.5 * std::sqrt(sigma.topLeftCorner<3, 3>().trace()));
+}
+
+// The steps between successive poses (report_pose_spread) against sampling: two poses with a
+// joint covariance whose cross terms are strong (the poses move largely together, as J-full's
+// poses do when the reference frame's noise dominates), 20000 draws, bound 3 % as above. The
+// step T_2⁻¹T_3 spreads much less than either pose; ignoring the cross terms would overstate it.
+TEST(PoseSpread, StepsUseTheCrossCovariance) {
+  std::mt19937 rng(9);
+  std::normal_distribution<double> normal;
+  Eigen::Matrix<double, 12, 12> L = Eigen::Matrix<double, 12, 12>::Zero();
+  for (int i = 0; i < 6; ++i) {  // a common part, and a smaller own part per pose
+    L(i, i) = L(i + 6, i) = 1e-3;
+    L(i + 6, i + 6) = 3e-4;
+    for (int j = 0; j < i; ++j)
+      L(i, j) = L(i + 6, j) = 2e-4 * normal(rng);
+  }
+  RefinementResult result;
+  result.poses.assign(3, Eigen::Isometry3d::Identity());
+  result.poses[1].linear() = so3_exp(Eigen::Vector3d(0.1, 0.2, -0.1));
+  result.poses[1].translation() = Eigen::Vector3d(0.3, 0.1, 0.8);
+  result.poses[2].linear() = so3_exp(Eigen::Vector3d(0.0, 0.4, 0.2));
+  result.poses[2].translation() = Eigen::Vector3d(0.5, -0.2, 1.1);
+  result.joint_covariance = L * L.transpose();
+  result.covariance = {Matrix6d::Zero(), result.joint_covariance.topLeftCorner<6, 6>(),
+                       result.joint_covariance.bottomRightCorner<6, 6>()};
+  report_pose_spread(result);
+  const RefinementReport& r = result.report;
+  ASSERT_EQ(r.step_translation_sd.size(), 2u);
+  EXPECT_DOUBLE_EQ(r.step_translation_sd[0], r.translation_sd[0]);  // the first step is pose 2
+  const Eigen::Isometry3d step = result.poses[1].inverse() * result.poses[2];
+  const int n = 20000;
+  double sum_t = 0.0, sum_r = 0.0;
+  for (int k = 0; k < n; ++k) {
+    Eigen::Matrix<double, 12, 1> z;
+    for (int i = 0; i < 12; ++i)
+      z(i) = normal(rng);
+    const Eigen::Matrix<double, 12, 1> xi = L * z;
+    const Eigen::Isometry3d moved = (se3_exp(xi.head<6>()) * result.poses[1]).inverse() *
+                                    (se3_exp(xi.tail<6>()) * result.poses[2]);
+    sum_t += (moved.translation() - step.translation()).squaredNorm();
+    sum_r += so3_log(moved.linear() * step.linear().transpose()).squaredNorm();
+  }
+  const double sampled_t = std::sqrt(sum_t / n), sampled_r = std::sqrt(sum_r / n);
+  std::printf("step: translation %.4g m sampled, %.4g predicted; rotation %.4g rad, %.4g\n",
+              sampled_t, r.step_translation_sd[1], sampled_r, r.step_rotation_sd[1]);
+  EXPECT_NEAR(sampled_t / r.step_translation_sd[1], 1.0, 0.03);
+  EXPECT_NEAR(sampled_r / r.step_rotation_sd[1], 1.0, 0.03);
+  EXPECT_LT(r.step_translation_sd[1], 0.5 * r.translation_sd[1]);
 }
 
 // J-full and Q-full on five noise-free 160x120 frames, each pose perturbed by 2 cm / 2°

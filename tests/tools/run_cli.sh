@@ -27,6 +27,11 @@ r = json.load(open(sys.argv[1] + "/ftf/report.json"))
 assert r["method"] == "j-ftf" and r["frames"] == 4 and r["keyframes"] == 4, r
 pairs = [k["pair"] for k in r["keyframe_records"][1:]]
 assert all(p is not None and p["verdict"] == "converged" for p in pairs), pairs
+# Each pair's predicted spread: one pose, one step, the same (J-ftf), positive.
+for p in pairs:
+    assert len(p["translation_sd_m"]) == 1 and p["step_translation_sd_m"] == p["translation_sd_m"], p
+    assert len(p["rotation_sd_rad"]) == 1 and p["step_rotation_sd_rad"] == p["rotation_sd_rad"], p
+    assert p["translation_sd_m"][0] > 0 and p["rotation_sd_rad"][0] > 0, p
 assert r["errors"]["relative_translation_rms_m"] < r["front_end_errors"]["relative_translation_rms_m"]
 # Whose quadrics each map is: J-ftf's for every keyframe that starts a pair, Quad IT's for the last.
 sources = [k["curvature"] for k in r["keyframe_records"]]

@@ -27,6 +27,12 @@ void write_refinement(JsonWriter& json, const char* name,
       .field("residual_variance", r->residual_variance)
       .field("sample_reuse", r->sample_reuse)  // the covariance's inflation (refiner.hpp)
       .field("degeneracy", r->degeneracy)
+      // per pose after the reference: the predicted RMS error against the reference frame
+      // (pose_spread, refiner.hpp), the spread under sensor noise, not the bias
+      .field("translation_sd_m", r->translation_sd)
+      .field("rotation_sd_rad", r->rotation_sd)
+      .field("step_translation_sd_m", r->step_translation_sd)  // successive frames
+      .field("step_rotation_sd_rad", r->step_rotation_sd)
       .field("isolated_frames",  // icp-bundle: window frames left as given (no overlap)
              std::vector<double>(r->isolated.begin(), r->isolated.end()))
       .end_object();
