@@ -66,7 +66,8 @@ struct RefinementReport {
   std::vector<double> translation_sd, rotation_sd;
   /// The same for the steps T_1⁻¹T_2, T_2⁻¹T_3, …, T_{M−1}⁻¹T_M between successive frames, from
   /// RefinementResult::joint_covariance (its cross terms): what a relative pose error metric
-  /// sees. For J-ftf the one step is the pose.
+  /// sees. For J-ftf the one step is the pose. Empty without a joint covariance (icp-bundle, a
+  /// degenerate S).
   std::vector<double> step_translation_sd, step_rotation_sd;
 
   bool converged() const { return verdict == RefinementVerdict::kConverged; }
@@ -98,7 +99,7 @@ PoseSpread pose_spread(const Matrix6d& covariance, const Eigen::Isometry3d& pose
 /// Fills the report's translation_sd / rotation_sd from result.covariance and result.poses, and
 /// step_translation_sd / step_rotation_sd from result.joint_covariance: the step
 /// T_{j−1}⁻¹ T_j moves, to first order, by the left update Ad(T_{j−1}⁻¹) (ξ_j − ξ_{j−1}) (ξ_1 = 0).
-
+/// The steps stay empty when joint_covariance is (a degenerate S).
 void report_pose_spread(RefinementResult& result);
 
 class Refiner {
