@@ -1,5 +1,6 @@
 #include "cli/arguments.hpp"
 
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <sstream>
@@ -144,6 +145,15 @@ std::string Arguments::help() const {
   out << "  --help\n      show this help and exit\n";
   if (!epilog_.empty()) out << '\n' << epilog_ << '\n';
   return out.str();
+}
+
+void parse_image_size(const std::string& option, const std::string& text, int& width, int& height) {
+  int consumed = 0;
+  if (std::sscanf(text.c_str(), "%dx%d%n", &width, &height, &consumed) != 2 ||
+      consumed != static_cast<int>(text.size()) || width < 1 || height < 1 || width > 16384 ||
+      height > 16384) {
+    throw UsageError("--" + option + " expects WIDTHxHEIGHT (e.g. 640x480), got '" + text + "'");
+  }
 }
 
 int run_program(const std::string& program, const std::function<int()>& body) {

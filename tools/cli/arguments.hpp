@@ -60,6 +60,9 @@ class Arguments {
   std::map<std::string, std::string> values_;
 };
 
+/// "WIDTHxHEIGHT" (each 1-16384) of option --`option`; a UsageError quoting the text otherwise.
+void parse_image_size(const std::string& option, const std::string& text, int& width, int& height);
+
 /// Runs body() and maps failures to exit codes: UsageError → 2 with a --help hint;
 /// jpcr::InputError and other exceptions → 1 with "error: ..." on stderr.
 int run_program(const std::string& program, const std::function<int()>& body);

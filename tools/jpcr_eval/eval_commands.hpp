@@ -5,5 +5,6 @@ namespace jpcr::eval {
 
 int run_trajectory(int argc, char** argv);
 int run_curvature(int argc, char** argv);
+int run_noise(int argc, char** argv);
 
 }  // namespace jpcr::eval

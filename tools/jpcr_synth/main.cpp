@@ -2,7 +2,6 @@
 // written in the TUM layout (io/synthetic_writer.hpp).
 
 #include <chrono>
-#include <cstdio>
 #include <iostream>
 #include <sstream>
 
@@ -18,16 +17,6 @@ namespace jpcr {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// "WxH" → width and height.
-void parse_size(const std::string& text, int& width, int& height) {
-  int consumed = 0;
-  if (std::sscanf(text.c_str(), "%dx%d%n", &width, &height, &consumed) != 2 ||
-      consumed != static_cast<int>(text.size()) || width < 1 || height < 1 || width > 16384 ||
-      height > 16384) {
-    throw cli::UsageError("--size expects WIDTHxHEIGHT (e.g. 640x480), got '" + text + "'");
-  }
-}
 
 std::string scene_list() {
   std::string list;
@@ -86,7 +75,7 @@ int run(int argc, char** argv) {
     CameraIntrinsics camera =
         args.has("config") ? load_camera_yaml(args.get("config")) : synthetic_camera();
     int width = camera.width, height = camera.height;
-    if (args.has("size")) parse_size(args.get("size"), width, height);
+    if (args.has("size")) cli::parse_image_size("size", args.get("size"), width, height);
     if (width != camera.width || height != camera.height) camera = camera.resized(width, height);
 
     const Clock::time_point start = Clock::now();

@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# jpcr_eval noise: a small J-ftf and Q-full study runs and reports consistent numbers (JSON), and
+# bad options exit 2 (usage) or 1 (input) with a message that names the problem.
+set -uo pipefail
+build=$1 src=$2
+eval_bin=$build/tools/jpcr_eval
+tmp=$(mktemp -d); trap 'rm -rf "$tmp"' EXIT
+# shellcheck source=expect.sh
+source "$src/tests/tools/expect.sh"
+
+small=(--size 80x60 --noise range:1 --noise-matched --device cpu)
+for method in j-ftf q-full; do
+  if ! "$eval_bin" noise "${small[@]}" --method "$method" --draws 3 --json > "$tmp/$method.json" \
+      2> "$tmp/$method.log"; then
+    echo "FAIL: jpcr_eval noise --method $method exited non-zero: $(cat "$tmp/$method.log")"; fail=1
+    continue
+  fi
+  # The summary agrees with the per-draw errors it came from.
+  /usr/bin/env python3 - "$tmp/$method.json" <<'PY' || fail=1
+import json, math, sys
+d = json.load(open(sys.argv[1]))
+e = d["errors"]
+assert d["draws"] == 3 and len(e) == 3 and all(len(x) == 6 for x in e), d
+mean = [sum(x[i] for x in e) / 3 for i in range(6)]
+assert all(abs(a - b) <= 1e-12 + 1e-9 * abs(b) for a, b in zip(mean, d["mean_error"])), (mean, d["mean_error"])
+rms_t = math.sqrt(sum(sum(v * v for v in x[:3]) for x in e) / 3)
+assert abs(rms_t - d["rms_translation_m"]) <= 1e-9 * rms_t, (rms_t, d["rms_translation_m"])
+# The RMS error splits into bias and spread: rms^2 = |mean|^2 + (n-1)/n spread^2.
+for part, rms, bias, spread in (("t", d["rms_translation_m"], d["bias_translation_m"], d["spread_translation_m"]),
+                                ("r", d["rms_rotation_rad"], d["bias_rotation_rad"], d["spread_rotation_rad"])):
+    want = math.sqrt(bias * bias + 2 / 3 * spread * spread)
+    assert abs(rms - want) <= 1e-9 * rms, (part, rms, want)
+assert d["predicted_translation_sd_m"] > 0 and d["step_translation_m"] > 0, d
+assert d["verdict"].startswith("too few draws"), d["verdict"]
+print("ok: summary of %s consistent, rms t %.3g m" % (d.get("draws"), d["rms_translation_m"]))
+PY
+  grep -q "device auto -> cpu\|runs on the cpu\|cpu" "$tmp/$method.log" || {
+    echo "FAIL: no device line in the log: $(cat "$tmp/$method.log")"; fail=1; }
+done
+# Text output: the table and the bias / spread lines.
+expect 0 "spread      t" -- "$eval_bin" noise "${small[@]}" --draws 2 --motion 0 --start-offset 1,0.1
+
+printf 'joint:\n  bogus_key: 1\n' > "$tmp/bad.yaml"
+expect 2 "draws must be 2-1000" -- "$eval_bin" noise "${small[@]}" --draws 1
+expect 2 "seed must be >= 0" -- "$eval_bin" noise "${small[@]}" --seed -3
+expect 2 "start-offset expects MM,DEG" -- "$eval_bin" noise "${small[@]}" --start-offset 5
+expect 2 "method expects j-ftf or q-full" -- "$eval_bin" noise "${small[@]}" --method j-full
+expect 2 "size expects WIDTHxHEIGHT" -- "$eval_bin" noise --size 80by60
+expect 2 "noise-matched needs --noise range:K" -- "$eval_bin" noise --noise kinect --noise-matched
+expect 2 "motion must be a finite scale" -- "$eval_bin" noise "${small[@]}" --motion nan
+expect 1 "range:K\|noise" -- "$eval_bin" noise --noise range:-1
+expect 1 "bad.yaml" -- "$eval_bin" noise "${small[@]}" --params "$tmp/bad.yaml"
+expect 1 "no_such_scene" -- "$eval_bin" noise --size 80x60 --scene no_such_scene
+expect 0 "usage: jpcr_eval noise" -- "$eval_bin" noise --help
+exit $fail
