@@ -22,7 +22,7 @@ args="$*"
 quick=0 no_build=0 out="" tum="" camera=configs/tum_fr1.yaml
 build=${JPCR_BUILD_DIR:-build}
 size=640x480 frames=4 window=4 rail_frames=200 rail_size=320x240 real_frames=300 real_jftf=10
-kinect_frames=8
+kinect_frames=8 study_size=320x240 study_draws=8
 usage() { sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; }
 while [[ $# -gt 0 ]]; do
   case $1 in
@@ -45,7 +45,7 @@ while [[ $# -gt 0 ]]; do
 done
 if [[ $quick == 1 ]]; then
   size=160x120 frames=3 window=3 rail_frames=24 rail_size=160x120 real_frames=8 real_jftf=3
-  kinect_frames=3
+  kinect_frames=3 study_size=80x60 study_draws=2
   out=${out:-out/reproduce_quick}
   tum=${tum:-tests/data/tum_fr1_xyz_20}
 fi
@@ -163,6 +163,29 @@ for scene in room_spheres cylinders_boxes torus_saddle; do
   done
   say "$scene kinect noise: j-ftf, configs/kinect_far.yaml ($(( $(date +%s) - start )) s)"
   run_method "$seq" j-ftf configs/kinect_far.yaml "$cell/j-ftf_kinect_far"
+done
+
+# 1c. Not in the paper: J-ftf's and Q-full's bias and spread over noise draws on the first step
+# of the room_spheres walk (jpcr_eval noise, README "Under heavy range noise J-ftf shortens the
+# step"), with the step's motion and with both frames at one pose.
+study=$runs/noise_study
+mkdir -p "$study"
+for k in 1 2 3; do
+  for method in j-ftf q-full; do
+    [[ $method == q-full && $k != 3 ]] && continue
+    for motion in 1 0; do
+      name=$study/${method}_range${k}_motion${motion}
+      [[ -s $name.json ]] && continue
+      say "noise study: $method range $k %, motion x$motion ($(( $(date +%s) - start )) s)"
+      "$bin/jpcr_eval" noise --method "$method" --noise "range:$k" --noise-matched \
+        --motion "$motion" --size "$study_size" --draws "$study_draws" --device cpu --json \
+        > "$name.json.tmp" 2> "$name.log" && mv "$name.json.tmp" "$name.json" &&
+        { git rev-parse --short HEAD > "$name.revision" 2>/dev/null || true; } || {
+        say "FAILED: jpcr_eval noise $method range $k % motion $motion (see $name.log)"
+        failures=$((failures + 1))
+      }
+    done
+  done
 done
 
 # 2. Drift along a straight rail (10 mm per frame, Kinect-like noise).

@@ -20,6 +20,9 @@ from numpy.lib.stride_tricks import sliding_window_view
 
 SCENES = ["room_spheres", "cylinders_boxes", "torus_saddle"]
 NOISES = [0, 1, 2, 3]
+# jpcr_eval noise runs of reproduce.sh (section 1c): <method>_range<k>_motion<scale>.
+STUDY_RUNS = [f"j-ftf_range{k}_motion{m}" for k in (1, 2, 3) for m in (1, 0)] + \
+    ["q-full_range3_motion1", "q-full_range3_motion0"]
 POSE_METHODS = ["icp-ftf", "icp-bundle", "q-full", "j-ftf", "j-full"]
 # Not the paper's: the joint refiners on the bilateral-filtered depth (pipeline.filtered_depth).
 FILTERED_METHODS = ["j-ftf-filtered", "j-full-filtered"]
@@ -631,6 +634,50 @@ def main():
               + f" | {ratio('j-ftf')} | {ratio('j-ftf_kinect_far')} |")
         w("")
 
+    # Noise study (jpcr_eval noise).
+    study_dir = os.path.join(a.runs, "noise_study")
+    study = {}
+    for name in STUDY_RUNS:
+        d = load_json(os.path.join(study_dir, name + ".json"))
+        if d:
+            study[name] = d
+    if study:
+        w("## Bias and spread over noise draws (not in the paper)\n")
+        w("`jpcr_eval noise`: one frame pair, the first step of the seed-1 room_spheres walk, "
+          "rendered once; each draw adds fresh range noise and refines from the true pose "
+          "(n₀ = gate = 3 σ). Bias = |mean error| over the draws, in mm and mrad, with its size "
+          "in standard errors of the mean; spread = RMS length of the errors about that mean; "
+          "predicted = the refiner's own translation_sd / rotation_sd; step kept = the estimated "
+          "step's length along the true one, as a fraction of it (translation, rotation). "
+          "'motion ×0' renders both frames at the same pose.\n")
+        revs = sorted({open(p).read().strip() for p in
+                       (os.path.join(study_dir, n + ".revision") for n in study)
+                       if os.path.exists(p)})
+        if revs:
+            w(f"These runs were made at revision {', '.join(f'`{r}`' for r in revs)}.\n")
+        w("| method | noise | motion | draws | bias t (mm) | bias r (mrad) | spread t (mm) | "
+          "spread r (mrad) | predicted t (mm) / r (mrad) | step kept (t, r) |")
+        w("|---|---|---|---|---|---|---|---|---|---|")
+        for name in STUDY_RUNS:
+            d = study.get(name)
+            if not d:
+                continue
+            method, noise, motion = name.split("_")
+            kept = "–"
+            step = d.get("step_log") or []
+            if len(step) == 6 and any(step[:3]) and any(step[3:]):
+                m = d["mean_error"]
+                frac = [1 + sum(m[i] * step[i] for i in r) / sum(step[i] ** 2 for i in r)
+                        for r in (range(3), range(3, 6))]
+                kept = f"{frac[0]:.2f}, {frac[1]:.2f}"
+            w(f"| {LABEL.get(method, method)} | {noise[5:]} % | ×{motion[6:]} | {d['draws']} | "
+              f"{1e3 * d['bias_translation_m']:.2f} ({d['bias_translation_standard_errors']:.1f}) | "
+              f"{1e3 * d['bias_rotation_rad']:.2f} ({d['bias_rotation_standard_errors']:.1f}) | "
+              f"{1e3 * d['spread_translation_m']:.2f} | {1e3 * d['spread_rotation_rad']:.2f} | "
+              f"{1e3 * d['predicted_translation_sd_m']:.2f} / "
+              f"{1e3 * d['predicted_rotation_sd_rad']:.2f} | {kept} |")
+        w("")
+
     # Real data.
     real = os.path.join(a.runs, "real")
     if os.path.isdir(real):
@@ -706,7 +753,8 @@ def main():
               f"{fmt(rmse(real_rows[same_name], 'rpe_per_frame', 'rotation_deg'), '.3f')} deg. "
               f"{shared}\n")
         scratch.cleanup()
-        peers = os.path.join(real, "peers.md")
+        problems += [f"noise study: no {n} run" for n in STUDY_RUNS if n not in study]
+    peers = os.path.join(real, "peers.md")
         if os.path.exists(peers) and os.path.getsize(peers):
             w("The OpenCV peer on the same frames, in the same process (`bench_icp_peers`):\n")
             w(open(peers).read().strip() + "\n")
@@ -818,6 +866,7 @@ def main():
     for m in ["icp-ftf", "j-ftf", "pipeline"]:
         if not (load_json(os.path.join(real, m, "report.json")) or {}).get("errors"):
             problems.append(f"real data: no {m} run with errors")
+    problems += [f"noise study: no {n} run" for n in STUDY_RUNS if n not in study]
     peers = os.path.join(real, "peers.md")
     if not (os.path.exists(peers) and os.path.getsize(peers)):
         problems.append("real data: no OpenCV peer table")

@@ -135,13 +135,14 @@ void write_text(std::ostream& out, const Study& s) {
   out << line << verdict_line(s) << '\n';
 }
 
-void write_json(std::ostream& out, const Study& s, double step_t, double step_r) {
+void write_json(std::ostream& out, const Study& s, const Eigen::Isometry3d& step) {
   JsonWriter json(out);
   auto vec = [](const Vector6d& x) { return std::vector<double>(x.data(), x.data() + 6); };
   json.begin_object()
       .field("draws", s.draws.size())
-      .field("step_translation_m", step_t)
-      .field("step_rotation_rad", step_r)
+      .field("step_translation_m", step.translation().norm())
+      .field("step_rotation_rad", rotation_angle(step.linear()))
+      .field("step_log", vec(se3_log(step)))
       .field("rms_translation_m", s.rms_t)
       .field("rms_rotation_rad", s.rms_r)
       .field("bias_translation_m", s.bias_t)
@@ -282,7 +283,7 @@ int run_noise(int argc, char** argv) {
     }
     const Study study = summarize(std::move(results));
     if (args.get_flag("json"))
-      write_json(std::cout, study, truth.translation().norm(), rotation_angle(truth.linear()));
+      write_json(std::cout, study, truth);
     else
       write_text(std::cout, study);
     return 0;
