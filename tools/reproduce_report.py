@@ -753,8 +753,7 @@ def main():
               f"{fmt(rmse(real_rows[same_name], 'rpe_per_frame', 'rotation_deg'), '.3f')} deg. "
               f"{shared}\n")
         scratch.cleanup()
-        problems += [f"noise study: no {n} run" for n in STUDY_RUNS if n not in study]
-    peers = os.path.join(real, "peers.md")
+        peers = os.path.join(real, "peers.md")
         if os.path.exists(peers) and os.path.getsize(peers):
             w("The OpenCV peer on the same frames, in the same process (`bench_icp_peers`):\n")
             w(open(peers).read().strip() + "\n")
@@ -866,6 +865,7 @@ def main():
     for m in ["icp-ftf", "j-ftf", "pipeline"]:
         if not (load_json(os.path.join(real, m, "report.json")) or {}).get("errors"):
             problems.append(f"real data: no {m} run with errors")
+    problems += [f"noise study: no {n} run" for n in STUDY_RUNS if n not in study]
     problems += [f"noise study: no {n} run" for n in STUDY_RUNS if n not in study]
     peers = os.path.join(real, "peers.md")
     if not (os.path.exists(peers) and os.path.getsize(peers)):
