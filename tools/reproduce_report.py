@@ -664,7 +664,7 @@ def main():
                 continue
             method, noise, motion = name.split("_")
             kept = "–"
-            step = d.get("step_log") or []
+            step = d.get("step") or []
             if len(step) == 6 and any(step[:3]) and any(step[3:]):
                 m = d["mean_error"]
                 frac = [1 + sum(m[i] * step[i] for i in r) / sum(step[i] ** 2 for i in r)

@@ -31,7 +31,7 @@ for part, rms, bias, spread in (("t", d["rms_translation_m"], d["bias_translatio
     want = math.sqrt(bias * bias + 2 / 3 * spread * spread)
     assert abs(rms - want) <= 1e-9 * rms, (part, rms, want)
 assert d["predicted_translation_sd_m"] > 0 and d["step_translation_m"] > 0, d
-assert abs(math.sqrt(sum(v * v for v in d["step_log"][:3])) - d["step_translation_m"]) < 1e-3 * d["step_translation_m"], d
+assert abs(math.sqrt(sum(v * v for v in d["step"][:3])) - d["step_translation_m"]) <= 1e-9 * d["step_translation_m"], d
 assert d["verdict"].startswith("too few draws"), d["verdict"]
 print("ok: summary of %s consistent, rms t %.3g m" % (d.get("draws"), d["rms_translation_m"]))
 PY
