@@ -671,8 +671,9 @@ def main():
                         for r in (range(3), range(3, 6))]
                 kept = f"{frac[0]:.2f}, {frac[1]:.2f}"
             w(f"| {LABEL.get(method, method)} | {noise[5:]} % | ×{motion[6:]} | {d['draws']} | "
-              f"{1e3 * d['bias_translation_m']:.2f} ({d['bias_translation_standard_errors']:.1f}) | "
-              f"{1e3 * d['bias_rotation_rad']:.2f} ({d['bias_rotation_standard_errors']:.1f}) | "
+              f"{1e3 * d['bias_translation_m']:.2f} "
+              f"({fmt(d['bias_translation_standard_errors'], '.1f')}) | "
+              f"{1e3 * d['bias_rotation_rad']:.2f} ({fmt(d['bias_rotation_standard_errors'], '.1f')}) | "
               f"{1e3 * d['spread_translation_m']:.2f} | {1e3 * d['spread_rotation_rad']:.2f} | "
               f"{1e3 * d['predicted_translation_sd_m']:.2f} / "
               f"{1e3 * d['predicted_rotation_sd_rad']:.2f} | {kept} |")
