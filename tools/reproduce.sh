@@ -165,13 +165,13 @@ for scene in room_spheres cylinders_boxes torus_saddle; do
   run_method "$seq" j-ftf configs/kinect_far.yaml "$cell/j-ftf_kinect_far"
 done
 
-# 1c. Not in the paper: J-ftf's and Q-full's bias and spread over noise draws on the first step
-# of the room_spheres walk (jpcr_eval noise, README "Under heavy range noise J-ftf shortens the
-# step"), with the step's motion and with both frames at one pose.
+# 1c. Not in the paper: J-ftf's, Q-full's and the peer ICP-ftf's bias and spread over noise draws
+# on the first step of the room_spheres walk (jpcr_eval noise, README "Under heavy range noise
+# J-ftf shortens the step"), with the step's motion and with both frames at one pose.
 study=$runs/noise_study
 mkdir -p "$study"
 for k in 1 2 3; do
-  for method in j-ftf q-full; do
+  for method in j-ftf icp-ftf q-full; do
     [[ $method == q-full && $k != 3 ]] && continue
     for motion in 1 0; do
       name=$study/${method}_range${k}_motion${motion}

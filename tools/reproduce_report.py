@@ -21,7 +21,8 @@ from numpy.lib.stride_tricks import sliding_window_view
 SCENES = ["room_spheres", "cylinders_boxes", "torus_saddle"]
 NOISES = [0, 1, 2, 3]
 # jpcr_eval noise runs of reproduce.sh (section 1c): <method>_range<k>_motion<scale>.
-STUDY_RUNS = [f"j-ftf_range{k}_motion{m}" for k in (1, 2, 3) for m in (1, 0)] + \
+STUDY_RUNS = [f"{method}_range{k}_motion{m}" for method in ("j-ftf", "icp-ftf")
+              for k in (1, 2, 3) for m in (1, 0)] + \
     ["q-full_range3_motion1", "q-full_range3_motion0"]
 POSE_METHODS = ["icp-ftf", "icp-bundle", "q-full", "j-ftf", "j-full"]
 # Not the paper's: the joint refiners on the bilateral-filtered depth (pipeline.filtered_depth).
@@ -645,7 +646,8 @@ def main():
         w("## Bias and spread over noise draws (not in the paper)\n")
         w("`jpcr_eval noise`: one frame pair, the first step of the seed-1 room_spheres walk, "
           "rendered once; each draw adds fresh range noise and refines from the true pose "
-          "(n₀ = gate = 3 σ). Bias = |mean error| over the draws, in mm and mrad, with its size "
+          "(n₀ = gate = 3 σ; ICP-ftf, the peer, on the noise-matched bilateral-filtered depth as "
+          "in the tables above). Bias = |mean error| over the draws, in mm and mrad, with its size "
           "in standard errors of the mean; spread = RMS length of the errors about that mean; "
           "predicted = the refiner's own translation_sd / rotation_sd; step kept = the estimated "
           "step's length along the true one, as a fraction of it (translation, rotation). "

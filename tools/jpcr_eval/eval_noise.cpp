@@ -1,7 +1,7 @@
-// jpcr_eval noise: a Monte-Carlo study of a pair refiner (J-ftf or Q-full) on one step of a
-// synthetic walk. Both frames are rendered once without noise; each draw adds fresh sensor noise
-// (jpcr_synth's models), refines from the same start, and records the error e = (t − t_true,
-// log(R R_trueᵀ)): the change of the translation vector and the rotation vector of the left
+// jpcr_eval noise: a Monte-Carlo study of a pair method (J-ftf, Q-full, or the peer ICP-ftf) on
+// one step of a synthetic walk. Both frames are rendered once without noise; each draw adds fresh
+// sensor noise (jpcr_synth's models), refines from the same start, and records the error e = (t −
+// t_true, log(R R_trueᵀ)): the change of the translation vector and the rotation vector of the left
 // rotation error, the quantities whose spread the refiner predicts (pose_spread, refiner.hpp).
 // Over the draws: the mean of e (the bias) with its standard error, the spread of e about that
 // mean, and the predicted spread (report.json's translation_sd_m / rotation_sd_rad).
@@ -15,6 +15,7 @@
 #include "cli/arguments.hpp"
 #include "cli/device_option.hpp"
 #include "jpcr/cuda/refiner_factory.hpp"
+#include "jpcr/frontend/point_to_plane_icp.hpp"
 #include "jpcr/io/json_writer.hpp"
 #include "jpcr/io/params.hpp"
 #include "jpcr/io/synthetic_noise.hpp"
@@ -30,8 +31,8 @@ namespace jpcr::eval {
 namespace {
 
 struct Draw {
-  Vector6d error;  // t − t_true (m), log(R R_trueᵀ) (rad)
-  RefinementVerdict verdict = RefinementVerdict::kConverged;
+  Vector6d error;       // t − t_true (m), log(R R_trueᵀ) (rad)
+  std::string verdict;  // the method's own (RefinementVerdict or IcpVerdict)
   int iterations = 0, rejected = 0;
   double predicted_t = 0.0, predicted_r = 0.0;  // report translation_sd, rotation_sd
 };
@@ -120,7 +121,7 @@ void write_text(std::ostream& out, const Study& s) {
     const Draw& d = s.draws[i];
     std::snprintf(line, sizeof(line), "%4zu   %12.3f  %14.3f  %10d  %8d  %s\n", i,
                   1e3 * d.error.head<3>().norm(), 1e3 * d.error.tail<3>().norm(), d.iterations,
-                  d.rejected, to_string(d.verdict));
+                  d.rejected, d.verdict.c_str());
     out << line;
   }
   out << "\n              t_x      t_y      t_z  (mm)     w_x      w_y      w_z  (mrad)\n";
@@ -135,7 +136,7 @@ void write_text(std::ostream& out, const Study& s) {
   std::snprintf(line, sizeof(line),
                 "\nRMS error   t %.3f mm   r %.3f mrad\n"
                 "bias        t %.3f mm (%.1f standard errors)   r %.3f mrad (%.1f)\n"
-                "spread      t %.3f mm   r %.3f mrad   (predicted by the refiner: t %.3f mm   r "
+                "spread      t %.3f mm   r %.3f mrad   (predicted by the method: t %.3f mm   r "
                 "%.3f mrad)\n",
                 1e3 * s.rms_t, 1e3 * s.rms_r, 1e3 * s.bias_t, s.bias_t_se, 1e3 * s.bias_r,
                 s.bias_r_se, 1e3 * s.spread_t, 1e3 * s.spread_r, 1e3 * s.predicted_t,
@@ -175,16 +176,57 @@ void write_json(std::ostream& out, const Study& s, const Eigen::Isometry3d& step
   out << '\n';
 }
 
+// The error of an estimate T of `truth`, in the coordinates of the predicted spread.
+Vector6d pose_error(const Eigen::Isometry3d& T, const Eigen::Isometry3d& truth) {
+  Vector6d e = pose_vector(T) - pose_vector(truth);
+  e.tail<3>() = so3_log(T.linear() * truth.linear().transpose());
+  return e;
+}
+
+Draw refine_draw(const Refiner& refiner, const QuadricFit& fit,
+                 const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
+                 const Eigen::Isometry3d& start, const Eigen::Isometry3d& truth) {
+  const RefinementResult r = refiner.refine(
+      vertices, camera, {Eigen::Isometry3d::Identity(), start}, fit.estimate(vertices[0]));
+  Draw d;
+  d.error = pose_error(r.poses[1], truth);
+  d.verdict = to_string(r.report.verdict);
+  d.iterations = r.report.iterations;
+  d.rejected = r.report.rejected_steps;
+  if (!r.report.translation_sd.empty()) {
+    d.predicted_t = r.report.translation_sd[0];
+    d.predicted_r = r.report.rotation_sd[0];
+  }
+  return d;
+}
+
+// ICP-ftf aligns frame 2 (source) to frame 1 (target): its pose is T₂ as the refiners'.
+Draw icp_draw(const FrontendParams& params, const std::vector<DepthImage>& depth,
+              const CameraIntrinsics& camera, const Eigen::Isometry3d& start,
+              const Eigen::Isometry3d& truth) {
+  const FramePyramid target = preprocess(Frame{0.0, depth[0], camera, {}}, params.preprocess);
+  const FramePyramid source = preprocess(Frame{0.0, depth[1], camera, {}}, params.preprocess);
+  const IcpResult r = align_point_to_plane(source, target, start, params.icp);
+  Draw d;
+  d.error = pose_error(r.pose, truth);
+  d.verdict = to_string(r.verdict);
+  d.iterations = r.iterations;
+  const PoseSpread spread = pose_spread(r.covariance, r.pose);
+  d.predicted_t = spread.translation_m;
+  d.predicted_r = spread.rotation_rad;
+  return d;
+}
+
 }  // namespace
 
 int run_noise(int argc, char** argv) {
   cli::Arguments args(
       "jpcr_eval noise",
-      "Monte-Carlo study of a pair refiner on one step of a synthetic walk: over\n"
+      "Monte-Carlo study of a pair method on one step of a synthetic walk: over\n"
       "fresh sensor-noise draws on the same two rendered frames, the mean pose error\n"
       "(the bias) with its standard error, the spread about it, and the spread the\n"
-      "refiner predicts. Errors: t - t_true in mm, log(R R_true^T) in mrad.");
-  args.option("method", "j-ftf | q-full", "j-ftf")
+      "method predicts. Errors: t - t_true in mm, log(R R_true^T) in mrad.");
+  args.option("method", "j-ftf | q-full | icp-ftf (the front end, the peer)", "j-ftf")
       .option("scene", "scene name or scene .yaml (jpcr_synth --list-scenes)", "room_spheres")
       .option("size", "image size WIDTHxHEIGHT", "320x240")
       .option("noise", "noise model: range:K (K % of the range along the ray) | kinect | none",
@@ -197,8 +239,8 @@ int run_noise(int argc, char** argv) {
       .option("seed", "seed of the first noise draw (draw i uses seed + i)", "1000")
       .option("params", "parameter YAML (sections quadric, joint), as jpcr_run --params")
       .flag("noise-matched",
-            "n0 = gate = 3 sigma per metre of range for range:K (the report's rule); "
-            "overrides the file's fair_n0_per_range and gate_per_range")
+            "the report's rules for range:K: n0 = gate = 3 sigma per metre of range, and "
+            "ICP-ftf's bilateral filter at 0.05 K m; overrides the parameter file there")
       .flag("json", "print JSON instead of text")
       .epilog(
           "examples:\n"
@@ -209,8 +251,8 @@ int run_noise(int argc, char** argv) {
   return cli::run_program("jpcr_eval noise", [&] {
     if (!args.parse(argc, argv)) return 0;
     const std::string method = args.get("method");
-    if (method != "j-ftf" && method != "q-full")
-      throw cli::UsageError("--method expects j-ftf or q-full, got '" + method + "'");
+    if (method != "j-ftf" && method != "q-full" && method != "icp-ftf")
+      throw cli::UsageError("--method expects j-ftf, q-full or icp-ftf, got '" + method + "'");
     int width = 0, height = 0;
     cli::parse_image_size("size", args.get("size"), width, height);
     const int draws = args.get_int("draws"), step = args.get_int("step");
@@ -237,8 +279,12 @@ int run_noise(int argc, char** argv) {
       const float per_range = static_cast<float>(3.0 * noise.range_percent / 100.0);
       params.joint.quadric.fit.fair_n0_per_range = per_range;
       params.joint.quadric.fit.gate_per_range = per_range;
+      params.frontend.preprocess.bilateral = true;
+      params.frontend.preprocess.bilateral_sigma_depth =
+          static_cast<float>(0.05 * noise.range_percent);
     }
     params.joint.validate();
+    params.frontend.validate();
 
     SyntheticSequenceOptions o;
     o.scene = args.get("scene");
@@ -256,7 +302,9 @@ int run_noise(int argc, char** argv) {
                                       render(sequence.scene(), camera, first * truth)};
     const Eigen::Isometry3d start = offset_start(truth, 1e-3 * offset_mm, offset_deg);
     const std::unique_ptr<Refiner> refiner =
-        make_refiner(method, params.joint, cli::device_from(args, params), std::cerr);
+        method == "icp-ftf"
+            ? nullptr
+            : make_refiner(method, params.joint, cli::device_from(args, params), std::cerr);
     const QuadricFit fit(params.joint.quadric);
 
     std::fprintf(stderr,
@@ -268,27 +316,19 @@ int run_noise(int argc, char** argv) {
     std::vector<Draw> results;
     const std::uint64_t seed = static_cast<std::uint64_t>(args.get_int("seed"));
     for (int i = 0; i < draws; ++i) {
+      std::vector<DepthImage> noisy;
       std::vector<VertexMap> vertices;
-      for (int f = 0; f < 2; ++f)
-        vertices.push_back(compute_vertex_map(
-            add_depth_noise(frames[f].exact_depth, frames[f].normals, camera, noise, seed + i, f),
-            camera));
-      const RefinementResult r = refiner->refine(
-          vertices, camera, {Eigen::Isometry3d::Identity(), start}, fit.estimate(vertices[0]));
-      Draw d;
-      d.error = pose_vector(r.poses[1]) - pose_vector(truth);
-      d.error.tail<3>() = so3_log(r.poses[1].linear() * truth.linear().transpose());
-      d.verdict = r.report.verdict;
-      d.iterations = r.report.iterations;
-      d.rejected = r.report.rejected_steps;
-      if (!r.report.translation_sd.empty()) {
-        d.predicted_t = r.report.translation_sd[0];
-        d.predicted_r = r.report.rotation_sd[0];
+      for (int f = 0; f < 2; ++f) {
+        noisy.push_back(
+            add_depth_noise(frames[f].exact_depth, frames[f].normals, camera, noise, seed + i, f));
+        vertices.push_back(compute_vertex_map(noisy.back(), camera));
       }
+      const Draw d = refiner ? refine_draw(*refiner, fit, vertices, camera, start, truth)
+                             : icp_draw(params.frontend, noisy, camera, start, truth);
       results.push_back(d);
       std::fprintf(stderr, "jpcr_eval noise: draw %d/%d  %.3f mm  %.3f mrad  %s\n", i + 1, draws,
                    1e3 * d.error.head<3>().norm(), 1e3 * d.error.tail<3>().norm(),
-                   to_string(d.verdict));
+                   d.verdict.c_str());
     }
     const Study study = summarize(std::move(results));
     if (args.get_flag("json"))
