@@ -168,22 +168,36 @@ done
 # 1c. Not in the paper: J-ftf's, Q-full's and the peer ICP-ftf's bias and spread over noise draws
 # on the first step of the room_spheres walk (jpcr_eval noise, README "Under heavy range noise
 # J-ftf shortens the step"), with the step's motion and with both frames at one pose.
+study_run() {  # out-name jpcr_eval-noise-options...
+  local name=$1; shift
+  [[ -s $name.json ]] && return 0
+  say "noise study: $(basename "$name") ($(( $(date +%s) - start )) s)"
+  if "$bin/jpcr_eval" noise "$@" --noise-matched --draws "$study_draws" --device cpu --json \
+      > "$name.json.tmp" 2> "$name.log" && mv "$name.json.tmp" "$name.json"; then
+    git rev-parse --short HEAD > "$name.revision" 2>/dev/null || true
+  else
+    say "FAILED: jpcr_eval noise $* (see $name.log)"
+    failures=$((failures + 1))
+  fi
+}
 study=$runs/noise_study
 mkdir -p "$study"
 for k in 1 2 3; do
   for method in j-ftf icp-ftf q-full; do
     [[ $method == q-full && $k != 3 ]] && continue
     for motion in 1 0; do
-      name=$study/${method}_range${k}_motion${motion}
-      [[ -s $name.json ]] && continue
-      say "noise study: $method range $k %, motion x$motion ($(( $(date +%s) - start )) s)"
-      "$bin/jpcr_eval" noise --method "$method" --noise "range:$k" --noise-matched \
-        --motion "$motion" --size "$study_size" --draws "$study_draws" --device cpu --json \
-        > "$name.json.tmp" 2> "$name.log" && mv "$name.json.tmp" "$name.json" &&
-        { git rev-parse --short HEAD > "$name.revision" 2>/dev/null || true; } || {
-        say "FAILED: jpcr_eval noise $method range $k % motion $motion (see $name.log)"
-        failures=$((failures + 1))
-      }
+      study_run "$study/${method}_range${k}_motion${motion}" --method "$method" \
+        --noise "range:$k" --motion "$motion" --size "$study_size"
+    done
+  done
+done
+# 1d. Not in the paper: J-ftf against ICP-ftf over the same noise draws, on the first step of each
+# scene's walk at the pose tables' size: the expected errors behind one cell of those tables.
+for k in 1 2 3; do
+  for scene in room_spheres cylinders_boxes torus_saddle; do
+    for method in icp-ftf j-ftf; do
+      study_run "$study/${method}_${scene}_range${k}" --method "$method" --scene "$scene" \
+        --noise "range:$k" --size "$size"
     done
   done
 done
