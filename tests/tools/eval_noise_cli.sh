@@ -39,6 +39,21 @@ PY
   [[ $method == icp-ftf ]] || grep -q "device cpu -> cpu" "$tmp/$method.log" || {
     echo "FAIL: no device line in the log: $(cat "$tmp/$method.log")"; fail=1; }
 done
+# pipeline.filtered_depth: J-ftf refines the bilateral-filtered depth, so the same draws give
+# other errors.
+printf 'pipeline:\n  filtered_depth: true\n' > "$tmp/filtered.yaml"
+if "$eval_bin" noise "${small[@]}" --draws 3 --json --params "$tmp/filtered.yaml" \
+    > "$tmp/filtered.json" 2> /dev/null; then
+  /usr/bin/env python3 - "$tmp/j-ftf.json" "$tmp/filtered.json" <<'PY' || fail=1
+import json, sys
+raw, filtered = (json.load(open(p))["errors"] for p in sys.argv[1:3])
+assert len(raw) == len(filtered) == 3
+assert any(abs(a - b) > 1e-9 for x, y in zip(raw, filtered) for a, b in zip(x, y)), "filtered_depth had no effect"
+print("ok: pipeline.filtered_depth changes J-ftf's errors on the same draws")
+PY
+else
+  echo "FAIL: jpcr_eval noise with pipeline.filtered_depth exited non-zero"; fail=1
+fi
 # Text output: the table and the bias / spread lines.
 expect 0 "spread      t" -- "$eval_bin" noise "${small[@]}" --draws 2 --motion 0 --start-offset 1,0.1
 

@@ -15,6 +15,7 @@
 #include "cli/arguments.hpp"
 #include "cli/device_option.hpp"
 #include "jpcr/cuda/refiner_factory.hpp"
+#include "jpcr/frontend/frame_pyramid.hpp"
 #include "jpcr/frontend/point_to_plane_icp.hpp"
 #include "jpcr/io/json_writer.hpp"
 #include "jpcr/io/params.hpp"
@@ -237,7 +238,9 @@ int run_noise(int argc, char** argv) {
       .option("motion", "scale of that step's motion (0: both frames at the same pose)", "1")
       .option("start-offset", "start this far from the true pose: 'MM,DEG' (e.g. 5,0.2)", "0,0")
       .option("seed", "seed of the first noise draw (draw i uses seed + i)", "1000")
-      .option("params", "parameter YAML (sections quadric, joint), as jpcr_run --params")
+      .option("params",
+              "parameter YAML (sections quadric, joint, frontend; pipeline.filtered_depth: "
+              "J-ftf / Q-full on the bilateral-filtered depth), as jpcr_run --params")
       .flag("noise-matched",
             "the report's rules for range:K: n0 = gate = 3 sigma per metre of range, and "
             "ICP-ftf's bilateral filter at 0.05 K m; overrides the parameter file there")
@@ -321,7 +324,13 @@ int run_noise(int argc, char** argv) {
       for (int f = 0; f < 2; ++f) {
         noisy.push_back(
             add_depth_noise(frames[f].exact_depth, frames[f].normals, camera, noise, seed + i, f));
-        vertices.push_back(compute_vertex_map(noisy.back(), camera));
+        // The refiners see the raw depth, or with pipeline.filtered_depth the front end's
+        // bilateral filter of it, as in the pipeline (pipeline_back_end.cpp).
+        vertices.push_back(
+            compute_vertex_map(params.pipeline.filtered_depth
+                                   ? bilateral_filter(noisy.back(), params.frontend.preprocess)
+                                   : noisy.back(),
+                               camera));
       }
       const Draw d = refiner ? refine_draw(*refiner, fit, vertices, camera, start, truth)
                              : icp_draw(params.frontend, noisy, camera, start, truth);
