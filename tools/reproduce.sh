@@ -191,14 +191,18 @@ for k in 1 2 3; do
     done
   done
 done
-# 1d. Not in the paper: J-ftf against ICP-ftf over the same noise draws, on the first step of each
-# scene's walk at the pose tables' size: the expected errors behind one cell of those tables.
+# 1d. Not in the paper: J-ftf (on the raw and on the filtered depth) against ICP-ftf over the same
+# noise draws, on the first step of each scene's walk at the pose tables' size: the expected
+# errors behind one cell of those tables.
+printf 'pipeline:\n  filtered_depth: true\n' > "$study/filtered_depth.yaml"
 for k in 1 2 3; do
   for scene in room_spheres cylinders_boxes torus_saddle; do
     for method in icp-ftf j-ftf; do
       study_run "$study/${method}_${scene}_range${k}" --method "$method" --scene "$scene" \
         --noise "range:$k" --size "$size"
     done
+    study_run "$study/j-ftf-filtered_${scene}_range${k}" --method j-ftf --scene "$scene" \
+      --noise "range:$k" --size "$size" --params "$study/filtered_depth.yaml"
   done
 done
 
