@@ -4,7 +4,11 @@
 // t_true, log(R R_trueᵀ)): the change of the translation vector and the rotation vector of the left
 // rotation error, the quantities whose spread the refiner predicts (pose_spread, refiner.hpp).
 // Over the draws: the mean of e (the bias) with its standard error, the spread of e about that
-// mean, and the predicted spread (report.json's translation_sd_m / rotation_sd_rad).
+// mean, and the predicted spread (report.json's translation_sd_m / rotation_sd_rad). For J-ftf and
+// Q-full also the mean angle between the reference frame's quadric normals and the true surface
+// normals, before (Quad IT) and after refinement: how well the per-pixel quadrics the pose rests
+// on are determined at this noise.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -36,6 +40,9 @@ struct Draw {
   std::string verdict;  // the method's own (RefinementVerdict or IcpVerdict)
   int iterations = 0, rejected = 0;
   double predicted_t = 0.0, predicted_r = 0.0;  // report translation_sd, rotation_sd
+  // Mean angle (rad) of the reference quadrics' normals from the true normals: Quad IT's (the
+  // start) and the refined ones; NaN for ICP-ftf, which fits no quadrics.
+  double normal_error_initial = NAN, normal_error = NAN;
 };
 
 struct Study {
@@ -45,7 +52,8 @@ struct Study {
   double bias_t = 0.0, bias_r = 0.0;      // |mean v|, |mean ω|
   double spread_t = 0.0, spread_r = 0.0;  // RMS length of e − mean (per part)
   double predicted_t = 0.0, predicted_r = 0.0;
-  double bias_t_se = 0.0, bias_r_se = 0.0;  // |mean| in standard errors of the mean
+  double bias_t_se = 0.0, bias_r_se = 0.0;                // |mean| in standard errors of the mean
+  double normal_error_initial = 0.0, normal_error = 0.0;  // means over the draws (rad), NaN: none
 };
 
 Study summarize(std::vector<Draw> draws) {
@@ -56,6 +64,8 @@ Study summarize(std::vector<Draw> draws) {
     s.mean += d.error / n;
     s.predicted_t += d.predicted_t / n;
     s.predicted_r += d.predicted_r / n;
+    s.normal_error_initial += d.normal_error_initial / n;
+    s.normal_error += d.normal_error / n;
   }
   for (const Draw& d : s.draws) {
     const Vector6d c = d.error - s.mean;
@@ -142,7 +152,14 @@ void write_text(std::ostream& out, const Study& s) {
                 1e3 * s.rms_t, 1e3 * s.rms_r, 1e3 * s.bias_t, s.bias_t_se, 1e3 * s.bias_r,
                 s.bias_r_se, 1e3 * s.spread_t, 1e3 * s.spread_r, 1e3 * s.predicted_t,
                 1e3 * s.predicted_r);
-  out << line << verdict_line(s) << '\n';
+  out << line;
+  if (std::isfinite(s.normal_error)) {
+    std::snprintf(line, sizeof(line),
+                  "normals     %.2f deg from the true ones after refinement (%.2f from Quad IT)\n",
+                  s.normal_error * 180 / M_PI, s.normal_error_initial * 180 / M_PI);
+    out << line;
+  }
+  out << verdict_line(s) << '\n';
 }
 
 void write_json(std::ostream& out, const Study& s, const Eigen::Isometry3d& step) {
@@ -162,8 +179,11 @@ void write_json(std::ostream& out, const Study& s, const Eigen::Isometry3d& step
       .field("spread_translation_m", s.spread_t)
       .field("spread_rotation_rad", s.spread_r)
       .field("predicted_translation_sd_m", s.predicted_t)
-      .field("predicted_rotation_sd_rad", s.predicted_r)
-      .field("mean_error", vec(s.mean))
+      .field("predicted_rotation_sd_rad", s.predicted_r);
+  if (std::isfinite(s.normal_error))
+    json.field("normal_error_rad", s.normal_error)
+        .field("normal_error_initial_rad", s.normal_error_initial);
+  json.field("mean_error", vec(s.mean))
       .field("sd_error", vec(s.sd))
       .field("verdict", verdict_line(s));
   json.key("errors").begin_array();
@@ -184,12 +204,32 @@ Vector6d pose_error(const Eigen::Isometry3d& T, const Eigen::Isometry3d& truth) 
   return e;
 }
 
+// The mean angle (rad) between the quadrics' normals and the true normals, over the pixels with
+// both; NaN where there are none.
+double mean_normal_error(const QuadricMap& quadrics, const NormalMap& truth) {
+  double sum = 0.0;
+  long count = 0;
+  for (int v = 0; v < quadrics.height(); ++v)
+    for (int u = 0; u < quadrics.width(); ++u) {
+      const Eigen::Vector3f& n = truth(u, v);
+      if (!quadrics.valid(u, v) || !std::isfinite(n.z())) continue;
+      const double c = quadrics.quadrics(u, v).normal().cast<double>().dot(n.cast<double>());
+      sum += std::acos(std::clamp(c, -1.0, 1.0));
+      ++count;
+    }
+  return count > 0 ? sum / static_cast<double>(count) : NAN;
+}
+
 Draw refine_draw(const Refiner& refiner, const QuadricFit& fit,
                  const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
-                 const Eigen::Isometry3d& start, const Eigen::Isometry3d& truth) {
-  const RefinementResult r = refiner.refine(
-      vertices, camera, {Eigen::Isometry3d::Identity(), start}, fit.estimate(vertices[0]));
+                 const NormalMap& true_normals, const Eigen::Isometry3d& start,
+                 const Eigen::Isometry3d& truth) {
+  const QuadricMap initial = fit.estimate(vertices[0]);
+  const RefinementResult r =
+      refiner.refine(vertices, camera, {Eigen::Isometry3d::Identity(), start}, initial);
   Draw d;
+  d.normal_error_initial = mean_normal_error(initial, true_normals);
+  d.normal_error = mean_normal_error(r.quadrics, true_normals);
   d.error = pose_error(r.poses[1], truth);
   d.verdict = to_string(r.report.verdict);
   d.iterations = r.report.iterations;
@@ -332,8 +372,9 @@ int run_noise(int argc, char** argv) {
                                    : noisy.back(),
                                camera));
       }
-      const Draw d = refiner ? refine_draw(*refiner, fit, vertices, camera, start, truth)
-                             : icp_draw(params.frontend, noisy, camera, start, truth);
+      const Draw d =
+          refiner ? refine_draw(*refiner, fit, vertices, camera, frames[0].normals, start, truth)
+                  : icp_draw(params.frontend, noisy, camera, start, truth);
       results.push_back(d);
       std::fprintf(stderr, "jpcr_eval noise: draw %d/%d  %.3f mm  %.3f mrad  %s\n", i + 1, draws,
                    1e3 * d.error.head<3>().norm(), 1e3 * d.error.tail<3>().norm(),
