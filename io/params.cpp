@@ -127,7 +127,7 @@ void read_tracker(YamlSection yaml, TrackerParams& p) {
 
 void read_frontend(YamlSection yaml, FrontendParams& p) {
   yaml.read("threads", p.threads);
-  if (p.threads < 0) yaml.fail("threads", "must be >= 0 (0: one per core)");
+  if (p.threads < 0 || p.threads > 256) yaml.fail("threads", "must be in 0..256 (0: one per core)");
   read_preprocess(yaml.section("preprocess"), p.preprocess);
   read_icp(yaml.section("icp"), p.icp);
   read_tracker(yaml.section("tracker"), p.tracker);

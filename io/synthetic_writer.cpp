@@ -9,6 +9,7 @@
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/depth_png.hpp"
 #include "jpcr/io/npy.hpp"
+#include "jpcr/io/staged_output.hpp"
 #include "jpcr/io/tum_lists.hpp"
 #include "jpcr/quadric/error.hpp"
 
@@ -21,7 +22,8 @@ namespace {
 static_assert(sizeof(Eigen::Vector2f) == 2 * sizeof(float), "curvature pixels must be packed");
 static_assert(sizeof(Eigen::Vector3f) == 3 * sizeof(float), "normal pixels must be packed");
 
-void prepare_directory(const std::string& directory, bool force) {
+// The checks of write_synthetic_sequence's target (the writing goes to a staging directory).
+void check_directory(const std::string& directory, bool force) {
   std::error_code ec;
   if (fs::exists(directory, ec)) {
     if (!fs::is_directory(directory, ec)) {
@@ -32,8 +34,6 @@ void prepare_directory(const std::string& directory, bool force) {
                        ": output directory is not empty (use --force to write into it)");
     }
   }
-  for (const char* sub : {"depth", "rgb", "curvature", "normals"})
-    ensure_directory((fs::path(directory) / sub).string());
 }
 
 // A TUM file list: "# comment" lines, a header, then "<stamp> <folder>/<stamp>.<ext>".
@@ -63,8 +63,13 @@ std::string format_stamp(double timestamp) {
 
 void write_synthetic_sequence(const SyntheticSequence& sequence, const std::string& directory,
                               const SyntheticWriterOptions& options) {
-  prepare_directory(directory, options.force);
-  const fs::path dir(directory);
+  check_directory(directory, options.force);
+  // Written whole or not at all: into a staging directory, moved into `directory` at the end
+  // (with force, the entries written replace those of the same names there).
+  StagedOutput out(directory, {});
+  const fs::path dir(out.directory());
+  for (const char* sub : {"depth", "rgb", "curvature", "normals"})
+    ensure_directory((dir / sub).string());
   const CameraIntrinsics& camera = sequence.camera();
   const std::size_t width = static_cast<std::size_t>(camera.width);
   const std::size_t height = static_cast<std::size_t>(camera.height);
@@ -85,7 +90,7 @@ void write_synthetic_sequence(const SyntheticSequence& sequence, const std::stri
     if (!stamps.empty() && stamp == stamps.back()) {
       throw InputError(directory + ": frames " + std::to_string(i - 1) + " and " +
                        std::to_string(i) + " share the timestamp " + stamp +
-                       " (the frame rate is above 1 MHz)");
+                       " at 1 us resolution (check the trajectory's rate and start_time)");
     }
     stamps.push_back(stamp);
     if (writing.valid()) {
@@ -102,6 +107,7 @@ void write_synthetic_sequence(const SyntheticSequence& sequence, const std::stri
   write_text((dir / "camera.yaml").string(),
              "# " + sequence.description() + "\n" + format_camera_yaml(camera));
   write_text((dir / "depth.txt").string(), file_list(stamps, "depth", ".png", options.comment));
+  out.commit();
 }
 
 }  // namespace jpcr

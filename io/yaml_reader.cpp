@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <limits>
+#include <set>
 
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -153,12 +154,19 @@ std::vector<YamlSection> YamlSection::sections(const std::string& key) {
 
 void YamlSection::finish() const {
   if (!node_ || !node_.IsMap()) return;
+  std::set<std::string> seen;
   for (const auto& item : node_) {
     if (!item.first.IsScalar()) {
       throw InputError(file_ + ":" + line_of(item.first) + " a key under '" +
                        (path_.empty() ? "<top>" : path_) + "' is not a plain name");
     }
     const std::string key = item.first.Scalar();
+    // yaml-cpp keeps both entries of a repeated key and node[key] finds the first: refuse it
+    // rather than silently ignore the second value.
+    if (!seen.insert(key).second) {
+      throw InputError(file_ + ":" + line_of(item.first) + " duplicate key '" + qualified(key) +
+                       "'");
+    }
     if (!used_.count(key)) {
       throw InputError(file_ + ":" + line_of(item.first) + " unknown key '" + qualified(key) + "'");
     }

@@ -97,6 +97,29 @@ TEST(Params, DefaultFileLoadsAndUnknownKeysAreErrors) {
   EXPECT_DOUBLE_EQ(load_params(empty).dataset.max_time_difference, 0.02);
 }
 
+// A repeated key is an error, not a silent first-one-wins (yaml-cpp keeps both entries).
+TEST(Params, DuplicateKeysAndSectionsAreErrorsNamingFileLineAndKey) {
+  test::TempDir dir;
+  const std::string key =
+      dir.write("k.yaml", "dataset:\n  max_time_difference: 0.1\n  max_time_difference: 0.2\n");
+  const std::string e1 = error_of([&] { load_params(key); });
+  EXPECT_NE(e1.find(key + ":3: duplicate key 'dataset.max_time_difference'"), std::string::npos)
+      << e1;
+  const std::string section = dir.write("s.yaml", "dataset: {}\nfrontend: {}\ndataset: {}\n");
+  EXPECT_NE(error_of([&] { load_params(section); }).find("duplicate key 'dataset'"),
+            std::string::npos);
+  const std::string camera = dir.write("c.yaml",
+                                       "fx: 525\nfy: 525\ncx: 1\ncy: 1\nwidth: 640\nheight: 480\n"
+                                       "depth_scale: 5000\nfx: 600\n");
+  EXPECT_NE(error_of([&] { load_camera_yaml(camera); }).find("duplicate key 'fx'"),
+            std::string::npos);
+  // A bound checked after reading still names the file and the key.
+  const std::string threads = dir.write("t.yaml", "frontend:\n  threads: 100000\n");
+  const std::string e2 = error_of([&] { load_params(threads); });
+  EXPECT_NE(e2.find(threads), std::string::npos) << e2;
+  EXPECT_NE(e2.find("frontend.threads"), std::string::npos) << e2;
+}
+
 // Section icp_bundle: the shipped defaults are the struct's, keys map onto it and reach the
 // pipeline, bad values name the key.
 TEST(Params, IcpBundleSection) {

@@ -69,6 +69,20 @@ expect 2 "selects no frame" -- "$curv" --dataset "$tmp/seq" --frames 5:9 --out "
 expect 1 "no curvature/ directory" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/missing_dir"
 printf 'quadric:\n  fit:\n    iterations: many\n' > "$tmp/bad.yaml"
 expect 1 "iterations" -- "$curv" --dataset "$tmp/seq" --params "$tmp/bad.yaml" --out "$tmp/x"
+expect 2 "--out needs a non-empty value" -- "$curv" --dataset "$tmp/seq" --out ""
+# Written whole or not at all: a run with a corrupt last frame leaves no map of the good frames
+# and no staging directory; a second run into an earlier OUT leaves none of the earlier maps.
+cp -r "$tmp/seq" "$tmp/seq_bad"
+last=$(ls "$tmp/seq_bad/depth" | sort | tail -1)
+head -c 100 "$tmp/seq/depth/$last" > "$tmp/seq_bad/depth/$last"
+expect 1 "$last" -- "$curv" --dataset "$tmp/seq_bad" --out "$tmp/partial"
+[ ! -e "$tmp/partial" ] || { echo "FAIL: a failed run wrote $(ls -R "$tmp/partial")"; fail=1; }
+[ -z "$(ls -A "$tmp" | grep partial-)" ] || { echo "FAIL: staging left behind"; fail=1; }
+expect 0 "wrote 1 curvature maps" -- "$curv" --dataset "$tmp/seq" --frames 2:3 --out "$tmp/it"
+n=$(ls "$tmp/it/curvature" | wc -l)
+[ "$n" = 1 ] || { echo "FAIL: $n maps in OUT after a 1-frame run into the 3-frame run's OUT"; fail=1; }
+# No pixel to compare (a support wider than any smooth patch) is an error, not an RMS of NaN.
+expect 1 "no pixel is valid in both" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --support 100
 expect 0 "Quad LS" -- "$curv" --help
 # The peer, CGAL jet fitting, where the build has it: a map as complete as Quad LS's.
 if "$curv" --help | grep -q "jet (the peer"; then

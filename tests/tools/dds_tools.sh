@@ -57,7 +57,9 @@ expect 2 "missing argument TOPIC" -- "$echo_bin"
 expect 2 "encoding: unknown depth encoding 'bgr8'" -- "$play" --dataset "$tum" --encoding bgr8
 expect 2 "frames 5:2 selects no frame" -- "$play" --dataset "$tum" --config "$cam" --frames 5:2
 expect 2 "frames expects FIRST:END" -- "$play" --dataset "$tum" --config "$cam" --frames 7
-expect 2 "rate must be positive" -- "$play" --dataset "$tum" --rate 0
+expect 2 "rate must be in 0.001..1e6" -- "$play" --dataset "$tum" --rate 0
+expect 2 "rate must be in 0.001..1e6" -- "$play" --dataset "$tum" --rate 1e-12
+expect 2 "wait-subscribers must be 0..86400" -- "$play" --dataset "$tum" --wait-subscribers 1e10
 expect 2 "domain must be in 0..232" -- "$echo_bin" rt/x --domain 300
 expect 2 "type must be odom, pose, path, image, camera_info or keyframe, got 'twist'" -- \
   "$echo_bin" rt/x --type twist

@@ -68,6 +68,11 @@ expect 1 "no camera given" -- "$odo" --dataset "$fr1" --out "$tmp/x.txt"
 expect 2 "out is required" -- "$odo" --dataset "$fr1"
 expect 2 "mode: unknown tracking mode 'sideways'" -- "$odo" --dataset "$fr1" --mode sideways --out "$tmp/x.txt"
 expect 2 "frames must be >= 0" -- "$odo" --dataset "$fr1" --frames -1 --out "$tmp/x.txt"
+expect 2 "summary and --out name the same file" -- \
+  "$odo" --dataset "$fr1" --config "$cam" --out "$tmp/x.txt" --summary "$tmp/./x.txt"
+mkdir -p "$tmp/adir"
+expect 1 "adir: is a directory" -- "$odo" --dataset "$fr1" --config "$cam" --out "$tmp/x.txt" \
+  --summary "$tmp/adir"
 [ -e "$tmp/x.txt" ] || [ -e "$tmp/x/traj.txt" ] && { echo "FAIL: output written after an error"; fail=1; }
 ls "$tmp" "$tmp/f2f" | grep -q '\.tmp\.' && { echo "FAIL: temporary file left behind"; fail=1; }
 exit $fail

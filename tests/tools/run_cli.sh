@@ -42,7 +42,29 @@ expect 0 "icp-ftf" -- "$run" --dataset "$tmp/seq" --method icp-ftf --out "$tmp/i
 n=$(ls "$tmp/icp/curvature" | wc -l)
 [ "$n" = 0 ] || { echo "FAIL: icp-ftf wrote $n curvature maps"; fail=1; }
 
+# Outputs are written whole or not at all (io/staged_output.hpp). A second run into the same
+# OUT replaces every output of the first: icp-ftf writes no map, so j-ftf's four must be gone,
+# while a file of the user's stays.
+echo "mine" > "$tmp/ftf/notes.txt"
+expect 0 "icp-ftf" -- "$run" --dataset "$tmp/seq" --method icp-ftf --out "$tmp/ftf"
+n=$(ls "$tmp/ftf/curvature" | wc -l)
+[ "$n" = 0 ] || { echo "FAIL: $n stale curvature maps of the earlier run in OUT"; fail=1; }
+grep -q mine "$tmp/ftf/notes.txt" || { echo "FAIL: the user's file in OUT was touched"; fail=1; }
+# A run that fails (a corrupt frame after good ones) changes nothing in OUT and leaves no
+# staging directory; into a new OUT it creates nothing.
+cp -r "$tmp/seq" "$tmp/seq_bad"
+last=$(ls "$tmp/seq_bad/depth" | sort | tail -1)
+head -c 100 "$tmp/seq/depth/$last" > "$tmp/seq_bad/depth/$last"
+before=$(cd "$tmp/ftf" && find . -type f | sort | xargs md5sum)
+expect 1 "$last" -- "$run" --dataset "$tmp/seq_bad" --method j-ftf --out "$tmp/ftf"
+[ "$(cd "$tmp/ftf" && find . -type f | sort | xargs md5sum)" = "$before" ] ||
+  { echo "FAIL: a failed run changed OUT"; fail=1; }
+expect 1 "$last" -- "$run" --dataset "$tmp/seq_bad" --method j-ftf --out "$tmp/fresh"
+[ ! -e "$tmp/fresh" ] || { echo "FAIL: a failed run created OUT"; fail=1; }
+[ -z "$(ls -A "$tmp" | grep partial)" ] || { echo "FAIL: staging left: $(ls -A "$tmp")"; fail=1; }
+
 # Bad input.
+expect 2 "--out needs a non-empty value" -- "$run" --dataset "$tmp/seq" --out ""
 expect 2 "--method: unknown method 'bundle'" -- "$run" --dataset "$tmp/seq" --method bundle --out "$tmp/x"
 expect 2 "--window must be in" -- "$run" --dataset "$tmp/seq" --window 1 --out "$tmp/x"
 expect 1 "error: .*nowhere" -- "$run" --dataset "$tmp/nowhere" --out "$tmp/x"

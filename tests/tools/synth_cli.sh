@@ -79,4 +79,15 @@ expect 1 "distortion must be zero" -- "$synth" --config "$tmp/distorted.yaml" --
 expect 1 "not empty (use --force" -- "$synth" --frames 1 --size 80x60 --out "$tmp/rail"
 [ -e "$tmp/x" ] && { echo "FAIL: output written after an error"; fail=1; }
 expect 0 "wrote 1 frames" -- "$synth" --frames 1 --size 80x60 --out "$tmp/rail" --force
+n=$(ls "$tmp/rail/depth" | wc -l)
+[ "$n" = 1 ] || { echo "FAIL: --force left $n depth frames (the earlier sequence's mixed in)"; fail=1; }
+expect 2 "--out needs a non-empty value" -- "$synth" --frames 1 --out ""
+expect 2 "each 1-16384" -- "$synth" --size 4294967376x60 --out "$tmp/x"
+# Timestamps that collide at 1 us stop the run before anything is written.
+printf 'synthetic:
+  trajectory:
+    rate: 1e300
+' > "$tmp/rate.yaml"
+expect 1 "share the timestamp" -- "$synth" --params "$tmp/rate.yaml" --frames 3 --size 80x60 --out "$tmp/x"
+[ -e "$tmp/x" ] && { echo "FAIL: output written after an error"; fail=1; }
 exit $fail

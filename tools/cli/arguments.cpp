@@ -62,6 +62,8 @@ bool Arguments::parse(int argc, char** argv, int first) {
         if (i + 1 >= argc) throw UsageError("--" + name + " needs a value");
         value = argv[++i];
       }
+      // An empty value is never meant: --out "" would write into the working directory.
+      if (value.empty()) throw UsageError("--" + name + " needs a non-empty value");
       values_[name] = value;
       continue;
     }
@@ -148,11 +150,20 @@ std::string Arguments::help() const {
 }
 
 void parse_image_size(const std::string& option, const std::string& text, int& width, int& height) {
-  int consumed = 0;
-  if (std::sscanf(text.c_str(), "%dx%d%n", &width, &height, &consumed) != 2 ||
-      consumed != static_cast<int>(text.size()) || width < 1 || height < 1 || width > 16384 ||
-      height > 16384) {
-    throw UsageError("--" + option + " expects WIDTHxHEIGHT (e.g. 640x480), got '" + text + "'");
+  // Digits only, at most 5 each: sscanf's %d would wrap 4294967376 to 80.
+  const auto side = [&](std::size_t from, std::size_t to, int& out) {
+    if (to <= from || to - from > 5) return false;
+    out = 0;
+    for (std::size_t i = from; i < to; ++i) {
+      if (text[i] < '0' || text[i] > '9') return false;
+      out = 10 * out + (text[i] - '0');
+    }
+    return out >= 1 && out <= 16384;
+  };
+  const std::size_t x = text.find('x');
+  if (x == std::string::npos || !side(0, x, width) || !side(x + 1, text.size(), height)) {
+    throw UsageError("--" + option + " expects WIDTHxHEIGHT, each 1-16384 (e.g. 640x480), got '" +
+                     text + "'");
   }
 }
 

@@ -2,7 +2,6 @@
 // (method.md §3) or Quad LS (§4), written as .npy maps, colour PNGs with a key, optional PLY
 // clouds and a JSON summary.
 #include <chrono>
-#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -17,6 +16,7 @@
 #include "jpcr/io/json_writer.hpp"
 #include "jpcr/io/open_dataset.hpp"
 #include "jpcr/io/params.hpp"
+#include "jpcr/io/staged_output.hpp"
 #include "jpcr/io/synthetic_writer.hpp"
 #include "jpcr/quadric/least_squares_quadric.hpp"
 #ifdef JPCR_HAVE_CGAL
@@ -27,7 +27,6 @@ namespace jpcr {
 
 namespace {
 
-namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 struct FrameRecord {
@@ -100,7 +99,9 @@ int run(int argc, char** argv) {
       .option("config", "camera YAML (default: the dataset's own camera.yaml or rawlog intrinsics)")
       .option("method", kMethodHelp, "it")
       .option("frames", "FIRST:LAST, 0-based, LAST excluded (default: all)")
-      .required("out", "output directory (created)")
+      .required("out",
+                "output directory (created; an earlier run's maps there are replaced, other "
+                "files are left alone; nothing is written when the run fails)")
       .option("params", "parameter YAML (section quadric:)", "")
       .option("color-scale", "curvedness drawn fully saturated in the PNG (1/m)", "10")
       .flag("ply", "also write a PLY point cloud per frame (k1, k2 as vertex properties)")
@@ -125,8 +126,9 @@ int run(int argc, char** argv) {
         open_dataset(args.get("dataset"), camera, params.dataset);
     const cli::FrameRange range =
         cli::parse_frame_range(args.has("frames") ? args.get("frames") : "", dataset->size());
-    const fs::path out = args.get("out");
-    const CurvatureWriter writer(out.string(), args.get_flag("ply"), colors);
+    // Written into a staging directory and moved into OUT at the end (io/staged_output.hpp).
+    StagedOutput out(args.get("out"), {"curvature", "curvature_png", "ply", "summary.json"});
+    const CurvatureWriter writer(out.directory(), args.get_flag("ply"), colors);
     std::cerr << "jpcr_curvature: " << dataset->description() << ", " << estimator->name()
               << ", frames " << range.first << ":" << range.last << '\n';
 
@@ -152,8 +154,9 @@ int run(int argc, char** argv) {
       records.push_back(record);
       progress(i - range.first + 1, range.last - range.first, extra.str());
     }
-    write_summary((out / "summary.json").string(), args.get("dataset"), *estimator, records);
-    std::cout << "wrote " << records.size() << " curvature maps to " << out.string() << '\n';
+    write_summary(out.path("summary.json"), args.get("dataset"), *estimator, records);
+    out.commit();
+    std::cout << "wrote " << records.size() << " curvature maps to " << out.target() << '\n';
     return 0;
   });
 }

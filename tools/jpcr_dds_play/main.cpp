@@ -85,9 +85,12 @@ int run(int argc, char** argv) {
       throw cli::UsageError(std::string("--encoding: ") + e.what());
     }
     const double rate = args.get_double("rate");
-    if (!(rate > 0.0)) throw cli::UsageError("--rate must be positive");
+    // Bounded so that the waits they imply fit the clock's duration type (1e10 s overflowed
+    // into no wait at all).
+    if (!(rate >= 1e-3 && rate <= 1e6)) throw cli::UsageError("--rate must be in 0.001..1e6");
     const double wait_seconds = args.get_double("wait-subscribers");
-    if (!(wait_seconds >= 0.0)) throw cli::UsageError("--wait-subscribers must be >= 0");
+    if (!(wait_seconds >= 0.0 && wait_seconds <= 86400.0))
+      throw cli::UsageError("--wait-subscribers must be 0..86400 s");
     const bool fast = args.get_flag("as-fast-as-possible");
     const DdsConfig dds = cli::dds_config_from(args);
     std::optional<CameraIntrinsics> camera;

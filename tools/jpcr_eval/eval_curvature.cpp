@@ -98,12 +98,21 @@ int run_curvature(int argc, char** argv) {
       const std::string name = "curvature/" + stamp + ".npy";
       const CurvatureImage truth = read_curvature_npy((fs::path(args.get("gt")) / name).string());
       if (!acc) acc.emplace(support_radius(support, truth.width()));
-      acc->add(truth, read_curvature_npy((fs::path(args.get("est")) / name).string()));
+      const std::string est_file = (fs::path(args.get("est")) / name).string();
+      try {
+        acc->add(truth, read_curvature_npy(est_file));
+      } catch (const InputError& e) {  // name the map, not only the problem
+        throw InputError(est_file + ": " + e.what());
+      }
     }
     const CurvatureErrors e = acc ? acc->result() : CurvatureErrors{};
     if (e.frames == 0)
       throw InputError(args.get("est") + ": no curvature map shares a stamp with " +
                        args.get("gt"));
+    if (e.compared == 0)  // nothing to average: the RMS would be NaN
+      throw InputError(args.get("est") + ": no pixel is valid in both it and " + args.get("gt") +
+                       (e.support_radius > 0 ? " with --support " + support : std::string()) +
+                       " (" + std::to_string(e.gt_valid) + " valid ground-truth pixels)");
     if (args.has("out"))
       write_file_atomically(args.get("out"), [&](std::ostream& out) { write_json(out, e); });
     if (args.get_flag("json")) {

@@ -313,6 +313,9 @@ int run_noise(int argc, char** argv) {
         consumed != static_cast<int>(offset.size()) || !std::isfinite(offset_mm) ||
         !std::isfinite(offset_deg))
       throw cli::UsageError("--start-offset expects MM,DEG (e.g. 5,0.2), got '" + offset + "'");
+    if (std::abs(offset_mm) > 1000 || std::abs(offset_deg) > 90)
+      throw cli::UsageError("--start-offset must be within 1000 mm and 90 deg, got '" + offset +
+                            "'");
     const NoiseModel noise = parse_noise(args.get("noise"));
 
     Params params = args.has("params") ? load_params(args.get("params")) : Params{};

@@ -1,4 +1,5 @@
 // jpcr_eval traj: ATE, RPE, paper-style relative errors and drift of an estimated trajectory.
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <optional>
@@ -126,7 +127,8 @@ int run_trajectory(int argc, char** argv) {
   return cli::run_program("jpcr_eval traj", [&] {
     if (!args.parse(argc, argv)) return 0;
     const double max_difference = args.get_double("max-difference");
-    if (!(max_difference > 0.0)) throw cli::UsageError("--max-difference must be positive");
+    if (!(max_difference > 0.0) || !std::isfinite(max_difference))
+      throw cli::UsageError("--max-difference must be a positive number of seconds");
     const Trajectory gt = read_trajectory(args.get("gt"));
     const Trajectory est = read_trajectory(args.get("est"));
     if (gt.empty()) throw InputError(args.get("gt") + ": no poses");
@@ -136,6 +138,10 @@ int run_trajectory(int argc, char** argv) {
     report.gt_poses = gt.size();
     report.est_poses = est.size();
     report.ate = compute_ate(gt, est, max_difference);
+    // Finite poses far beyond any scene (1e308 m) overflow the alignment: say so, not "nan".
+    if (!std::isfinite(report.ate.translation.rmse) || !std::isfinite(report.ate.translation.max))
+      throw InputError(args.get("est") + ": the errors against " + args.get("gt") +
+                       " are not finite (positions too large to align?)");
     report.rpe_frame = compute_rpe(gt, est, 1.0, DeltaUnit::kFrames);
     if (est.back().timestamp - est.front().timestamp > 1.0) {
       try {

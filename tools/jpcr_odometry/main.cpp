@@ -1,6 +1,8 @@
 // jpcr_odometry: the front end on a dataset. Dense point-to-plane ICP (ICP-ftf, the paper's
 // baseline) frame to frame or frame to keyframe; writes the TUM trajectory and a JSON summary
 // with every frame's verdict, timings and the keyframes.
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -125,7 +127,12 @@ int run(int argc, char** argv) {
     if (limit < 0) throw cli::UsageError("--frames must be >= 0");
     const std::string out = args.get("out");
     const std::string summary = args.has("summary") ? args.get("summary") : out + ".json";
-    for (const std::string& file : {out, summary}) {  // before the run, so it fails early
+    // Before the run, so it fails early.
+    if (std::filesystem::weakly_canonical(out) == std::filesystem::weakly_canonical(summary))
+      throw cli::UsageError("--summary and --out name the same file: " + out);
+    for (const std::string& file : {out, summary}) {
+      if (std::filesystem::is_directory(file))
+        throw InputError(file + ": is a directory, not a file to write");
       const std::string parent = std::filesystem::path(file).parent_path().string();
       if (!parent.empty()) ensure_directory(parent);
     }
@@ -166,8 +173,19 @@ int run(int argc, char** argv) {
     }
     run.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     run.keyframes = tracker.keyframe_indices();
-    write_trajectory(out, trajectory, "jpcr_odometry " + run.mode + " on " + dataset);
-    write_file_atomically(summary, [&](std::ostream& s) { write_summary(s, run); });
+    // Both files or neither: the trajectory waits beside OUT until the summary is written.
+    const std::string staged = out + ".partial-" + std::to_string(::getpid());
+    write_trajectory(staged, trajectory, "jpcr_odometry " + run.mode + " on " + dataset);
+    try {
+      write_file_atomically(summary, [&](std::ostream& s) { write_summary(s, run); });
+    } catch (...) {
+      std::remove(staged.c_str());
+      throw;
+    }
+    if (std::rename(staged.c_str(), out.c_str()) != 0) {
+      std::remove(staged.c_str());
+      throw InputError(out + ": cannot be moved into place");
+    }
     std::cout << "wrote " << trajectory.size() << " poses to " << out << " and the summary to "
               << summary << " (" << run.keyframes.size() << " keyframes, " << failed
               << " frames kept the last motion, " << 1e3 * run.seconds / static_cast<double>(frames)

@@ -3,7 +3,6 @@
 // methods alone for comparisons. Writes the refined trajectory, the keyframes, a curvature map
 // per keyframe and a JSON report; with ground truth, prints the error table.
 #include <chrono>
-#include <filesystem>
 #include <iostream>
 #include <sstream>
 
@@ -17,6 +16,7 @@
 #include "jpcr/io/curvature_output.hpp"
 #include "jpcr/io/open_dataset.hpp"
 #include "jpcr/io/params.hpp"
+#include "jpcr/io/staged_output.hpp"
 #include "jpcr/io/synthetic_writer.hpp"
 #include "jpcr/io/tum_lists.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -29,8 +29,6 @@
 namespace jpcr {
 
 namespace {
-
-namespace fs = std::filesystem;
 
 Trajectory keyframe_trajectory(const KeyframePipeline& p) {
   Trajectory out;
@@ -61,7 +59,9 @@ int run_main(int argc, char** argv) {
       .option("window", "keyframes per J-full / Q-full / ICP-bundle window, 2-16 (default: params)")
       .option("params", "parameter YAML (sections frontend, quadric, joint, icp_bundle, pipeline)")
       .option("frames", "FIRST:LAST, 0-based, LAST excluded (default: all)")
-      .required("out", "output directory (created)")
+      .required("out",
+                "output directory (created; the outputs of an earlier run there are replaced, "
+                "other files are left alone; nothing is written when the run fails)")
       .flag("ply", "also write a PLY point cloud per keyframe");
   cli::add_device_option(args);
 #ifdef JPCR_HAVE_DDS
@@ -85,13 +85,13 @@ int run_main(int argc, char** argv) {
         open_dataset(args.get("dataset"), camera, params.dataset);
     const cli::FrameRange range =
         cli::parse_frame_range(args.has("frames") ? args.get("frames") : "", dataset->size());
-    const fs::path out = args.get("out");
-    const CurvatureWriter writer(out.string(), args.get_flag("ply"));
     std::cerr << "jpcr_run: " << dataset->description() << ", method " << to_string(pipeline.method)
               << ", window " << pipeline.window << ", frames " << range.first << ":" << range.last
               << '\n';
 
 #ifdef JPCR_HAVE_DDS
+    if (!args.get_flag("dds") && (args.has("domain") || args.has("cyclone-uri")))
+      throw cli::UsageError("--domain and --cyclone-uri need --dds");
     std::optional<DdsParticipant> participant;
     std::optional<cli::PipelinePublisher> dds;
     if (args.get_flag("dds")) {
@@ -103,6 +103,12 @@ int run_main(int argc, char** argv) {
     const KeyframePipeline* self = nullptr;
     const RefinerFactory refiners =
         device_refiner_factory(cli::device_from(args, params), std::cerr);
+    // Everything is written into a staging directory and moved into OUT at the end: a run that
+    // fails leaves OUT as it was, and a run into an earlier run's OUT replaces all its outputs.
+    StagedOutput out(args.get("out"),
+                     {"trajectory.txt", "verdicts.txt", "front_end.txt", "keyframes.txt",
+                      "report.json", "curvature", "curvature_png", "ply"});
+    const CurvatureWriter writer(out.directory(), args.get_flag("ply"));
     KeyframePipeline runner(
         pipeline,
         [&](int k, const Frame& frame, const QuadricMap& quadrics) {
@@ -119,7 +125,13 @@ int run_main(int argc, char** argv) {
     self = &runner;
     cli::Progress progress("jpcr_run");
     for (std::size_t i = range.first; i < range.last; ++i) {
-      const PipelineFrame& f = runner.add(dataset->load(i));
+      const PipelineFrame& f = [&]() -> const PipelineFrame& {
+        try {
+          return runner.add(dataset->load(i));
+        } catch (const InputError& e) {  // name the dataset and the frame
+          throw InputError(args.get("dataset") + ": frame " + std::to_string(i) + ": " + e.what());
+        }
+      }();
 #ifdef JPCR_HAVE_DDS
       if (dds) dds->frame_added(runner, f);
 #endif
@@ -138,22 +150,23 @@ int run_main(int argc, char** argv) {
 #endif
 
     const Trajectory refined = runner.trajectory();
-    write_trajectory((out / "trajectory.txt").string(), refined);
-    write_file_atomically((out / "verdicts.txt").string(),
+    write_trajectory(out.path("trajectory.txt"), refined);
+    write_file_atomically(out.path("verdicts.txt"),
                           [&](std::ostream& o) { run::write_verdicts(o, runner); });
-    write_trajectory((out / "front_end.txt").string(), runner.front_end_trajectory());
-    write_trajectory((out / "keyframes.txt").string(), keyframe_trajectory(runner));
+    write_trajectory(out.path("front_end.txt"), runner.front_end_trajectory());
+    write_trajectory(out.path("keyframes.txt"), keyframe_trajectory(runner));
     Trajectory gt;
     for (std::size_t i = range.first; i < range.last; ++i)
       if (const std::optional<Eigen::Isometry3d> T = dataset->ground_truth(i))
         gt.push_back({dataset->timestamp(i), *T});
     const auto front_errors = run::evaluate(gt, runner.front_end_trajectory());
     const auto errors = run::evaluate(gt, refined);
-    write_file_atomically((out / "report.json").string(), [&](std::ostream& o) {
+    write_file_atomically(out.path("report.json"), [&](std::ostream& o) {
       run::write_report(o, args.get("dataset"), runner, front_errors, errors, progress.seconds());
     });
+    out.commit();
     std::cout << "wrote " << refined.size() << " poses, " << runner.keyframes().size()
-              << " keyframes and " << writer.written() << " curvature maps to " << out.string()
+              << " keyframes and " << writer.written() << " curvature maps to " << out.target()
               << '\n';
     if (errors) run::print_error_table(std::cout, to_string(pipeline.method), front_errors, errors);
     return 0;

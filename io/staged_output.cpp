@@ -1,0 +1,62 @@
+#include "jpcr/io/staged_output.hpp"
+
+#include <unistd.h>
+
+#include <filesystem>
+#include <system_error>
+
+#include "jpcr/io/atomic_file.hpp"
+#include "jpcr/quadric/error.hpp"
+
+namespace jpcr {
+
+namespace fs = std::filesystem;
+
+StagedOutput::StagedOutput(std::string target, std::vector<std::string> layout)
+    : target_(std::move(target)), layout_(std::move(layout)) {
+  if (target_.empty()) throw InputError("output directory: the path is empty");
+  std::error_code ec;
+  if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
+    throw InputError(target_ + ": output path exists and is not a directory");
+  fs::path t = fs::path(target_).lexically_normal();
+  if (t.filename().empty()) t = t.parent_path();  // "out/" → "out"
+  const fs::path parent = t.has_parent_path() ? t.parent_path() : fs::path(".");
+  ensure_directory(parent.string());
+  // A hidden sibling: renames into the target stay on one file system.
+  staging_ =
+      (parent / ("." + t.filename().string() + ".partial-" + std::to_string(::getpid()))).string();
+  fs::remove_all(staging_, ec);
+  ensure_directory(staging_);
+}
+
+StagedOutput::~StagedOutput() {
+  if (committed_) return;
+  std::error_code ec;
+  fs::remove_all(staging_, ec);  // a failed run leaves nothing behind
+}
+
+std::string StagedOutput::path(const std::string& name) const {
+  return (fs::path(staging_) / name).string();
+}
+
+void StagedOutput::commit() {
+  ensure_directory(target_);
+  std::vector<std::string> names = layout_;
+  if (names.empty())
+    for (const fs::directory_entry& e : fs::directory_iterator(staging_))
+      names.push_back(e.path().filename().string());
+  for (const std::string& name : names) {
+    const fs::path from = fs::path(staging_) / name, to = fs::path(target_) / name;
+    std::error_code ec;
+    fs::remove_all(to, ec);
+    if (ec) throw InputError(to.string() + ": cannot replace (" + ec.message() + ")");
+    if (!fs::exists(from, ec)) continue;
+    fs::rename(from, to, ec);
+    if (ec) throw InputError(to.string() + ": cannot be moved into place (" + ec.message() + ")");
+  }
+  std::error_code ec;
+  fs::remove_all(staging_, ec);
+  committed_ = true;
+}
+
+}  // namespace jpcr

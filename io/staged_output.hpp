@@ -1,0 +1,45 @@
+// An output directory written whole or not at all. A program writes into a staging directory
+// next to the target; commit() then replaces the target's entries of the program's layout with
+// the staged ones. A run that fails before commit() (an exception unwinds the StagedOutput)
+// removes the staging directory and leaves the target exactly as it was, so an earlier run's
+// outputs are never mixed with a new run's, and a failed run leaves nothing half written.
+//
+//   StagedOutput out("run1", {"trajectory.txt", "curvature"});
+//   write_trajectory(out.path("trajectory.txt"), ...);   // into run1/.staging
+//   out.commit();                                         // run1/trajectory.txt, run1/curvature
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace jpcr {
+
+class StagedOutput {
+ public:
+  /// `target`: the output directory (created at commit when missing; its parent now). `layout`:
+  /// every top-level name the program may write there; commit() removes each of them from the
+  /// target, staged this time or not, so no output of an earlier run survives beside the new
+  /// ones, and leaves every other entry alone. Empty `layout`: the names staged this time.
+  /// Throws InputError naming `target` when it is empty, exists and is not a directory, or its
+  /// parent cannot be created.
+  StagedOutput(std::string target, std::vector<std::string> layout);
+  ~StagedOutput();  // removes the staging directory unless committed
+  StagedOutput(const StagedOutput&) = delete;
+  StagedOutput& operator=(const StagedOutput&) = delete;
+
+  /// The staging directory, and a path inside it.
+  const std::string& directory() const { return staging_; }
+  std::string path(const std::string& name) const;
+  const std::string& target() const { return target_; }
+
+  /// Moves the staged entries into the target (same file system: renames). Throws InputError
+  /// naming the entry that cannot be replaced.
+  void commit();
+
+ private:
+  std::string target_, staging_;
+  std::vector<std::string> layout_;
+  bool committed_ = false;
+};
+
+}  // namespace jpcr

@@ -1,0 +1,100 @@
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+
+#include "jpcr/io/atomic_file.hpp"
+#include "jpcr/io/staged_output.hpp"
+#include "jpcr/quadric/error.hpp"
+#include "temp_dir.hpp"
+
+namespace jpcr {
+namespace {
+
+namespace fs = std::filesystem;
+
+// Entries of a directory, hidden ones (the staging directory) included.
+int entries(const std::string& dir) {
+  int n = 0;
+  for ([[maybe_unused]] const fs::directory_entry& e : fs::directory_iterator(dir))
+    ++n;
+  return n;
+}
+
+void write(const std::string& path, const std::string& text) {
+  write_file_atomically(path, [&](std::ostream& out) { out << text; });
+}
+
+TEST(StagedOutput, NothingReachesTheTargetBeforeCommit) {
+  test::TempDir dir;
+  const std::string target = dir.file("run");
+  {
+    StagedOutput out(target, {"a.txt"});
+    write(out.path("a.txt"), "new");
+    EXPECT_FALSE(fs::exists(target));
+    out.commit();
+  }
+  EXPECT_EQ(read_file(dir.file("run/a.txt")), "new");
+  EXPECT_EQ(entries(dir.path()), 1);  // only the target: no staging left
+}
+
+TEST(StagedOutput, AFailedRunLeavesTheTargetAsItWas) {
+  test::TempDir dir;
+  const std::string target = dir.file("run");
+  fs::create_directories(target + "/maps");
+  write(target + "/a.txt", "old");
+  write(target + "/maps/1.npy", "old map");
+  try {
+    StagedOutput out(target, {"a.txt", "maps"});
+    write(out.path("a.txt"), "half");
+    throw std::runtime_error("the run fails");
+  } catch (const std::runtime_error&) {
+  }
+  EXPECT_EQ(read_file(target + "/a.txt"), "old");
+  EXPECT_EQ(read_file(target + "/maps/1.npy"), "old map");
+  EXPECT_EQ(entries(dir.path()), 1);  // the staging directory is gone
+}
+
+TEST(StagedOutput, CommitReplacesEveryLayoutEntryAndKeepsOtherFiles) {
+  test::TempDir dir;
+  const std::string target = dir.file("run");
+  fs::create_directories(target + "/maps");
+  write(target + "/maps/old_stamp.npy", "an earlier run's map");
+  write(target + "/ply_left_over.txt", "in the layout, not written this time");
+  write(target + "/notes.txt", "the user's");
+  StagedOutput out(target, {"maps", "ply_left_over.txt"});
+  fs::create_directories(out.path("maps"));
+  write(out.path("maps/new_stamp.npy"), "this run's map");
+  out.commit();
+  EXPECT_FALSE(fs::exists(target + "/maps/old_stamp.npy"));  // no stale map beside the new
+  EXPECT_EQ(read_file(target + "/maps/new_stamp.npy"), "this run's map");
+  EXPECT_FALSE(fs::exists(target + "/ply_left_over.txt"));
+  EXPECT_EQ(read_file(target + "/notes.txt"), "the user's");
+}
+
+TEST(StagedOutput, EmptyLayoutMovesWhatWasStaged) {
+  test::TempDir dir;
+  const std::string target = dir.file("deep/er/run/");  // parents created, trailing slash
+  StagedOutput out(target, {});
+  write(out.path("x.txt"), "x");
+  out.commit();
+  EXPECT_EQ(read_file(dir.file("deep/er/run/x.txt")), "x");
+  EXPECT_EQ(entries(dir.file("deep/er")), 1);
+}
+
+TEST(StagedOutput, BadTargetsAreInputErrorsNamingThem) {
+  test::TempDir dir;
+  const std::string file = dir.write("a_file", "x");
+  try {
+    StagedOutput out(file, {});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(file + ": output path exists and is not a directory"),
+              std::string::npos);
+  }
+  EXPECT_THROW(StagedOutput("", {}), InputError);
+  EXPECT_THROW(StagedOutput(file + "/under_a_file", {}), InputError);
+}
+
+}  // namespace
+}  // namespace jpcr
