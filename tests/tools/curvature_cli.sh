@@ -70,6 +70,7 @@ expect 1 "no curvature/ directory" -- "$eval_bin" curvature --gt "$tmp/seq" --es
 printf 'quadric:\n  fit:\n    iterations: many\n' > "$tmp/bad.yaml"
 expect 1 "iterations" -- "$curv" --dataset "$tmp/seq" --params "$tmp/bad.yaml" --out "$tmp/x"
 expect 2 "--out needs a non-empty value" -- "$curv" --dataset "$tmp/seq" --out ""
+expect 2 "color-scale must be a positive finite" -- "$curv" --dataset "$tmp/seq" --color-scale inf --out "$tmp/x"
 # Written whole or not at all: a run with a corrupt last frame leaves no map of the good frames
 # and no staging directory; a second run into an earlier OUT leaves none of the earlier maps.
 cp -r "$tmp/seq" "$tmp/seq_bad"

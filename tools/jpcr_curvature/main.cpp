@@ -2,6 +2,7 @@
 // (method.md §3) or Quad LS (§4), written as .npy maps, colour PNGs with a key, optional PLY
 // clouds and a JSON summary.
 #include <chrono>
+#include <cmath>
 #include <iostream>
 #include <memory>
 #include <sstream>
@@ -119,7 +120,8 @@ int run(int argc, char** argv) {
         make_estimator(args.get("method"), params.quadric, cli::device_from(args, params));
     CurvatureColorParams colors;
     colors.scale = static_cast<float>(args.get_double("color-scale"));
-    if (!(colors.scale > 0.0f)) throw cli::UsageError("--color-scale must be positive");
+    if (!(colors.scale > 0.0f) || !std::isfinite(colors.scale))
+      throw cli::UsageError("--color-scale must be a positive finite curvedness (1/m)");
     std::optional<CameraIntrinsics> camera;
     if (args.has("config")) camera = load_camera_yaml(args.get("config"));
     const std::unique_ptr<FrameSource> dataset =
