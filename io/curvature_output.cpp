@@ -33,6 +33,10 @@ CurvatureImage read_curvature_npy(const std::string& path) {
       array.shape[1] == 0 || array.shape[0] > 1 << 16 || array.shape[1] > 1 << 16) {
     throw InputError(path + ": expected a curvature map of shape H x W x 2");
   }
+  // Curvature in 1/m is real-valued; an integer array is some other image, not a map to score.
+  if (array.dtype != "f4" && array.dtype != "f8")
+    throw InputError(path + ": a curvature map must be float32 or float64, got dtype '" +
+                     array.dtype + "'");
   const std::vector<float> values = array.to_float();
   CurvatureImage image(static_cast<int>(array.shape[1]), static_cast<int>(array.shape[0]),
                        Eigen::Vector2f::Zero());

@@ -57,6 +57,12 @@ TEST(CurvatureOutput, ReadingAMapOfTheWrongShapeNamesTheFile) {
               read_curvature_npy(dir.file("missing.npy"));
             }).find("missing.npy"),
             std::string::npos);
+  const std::vector<std::int32_t> integers(4 * 3 * 2, 7);
+  write_npy<std::int32_t>(dir.file("labels.npy"), {4, 3, 2}, integers.data());
+  EXPECT_NE(test::input_error_of([&] {
+              read_curvature_npy(dir.file("labels.npy"));
+            }).find("labels.npy: a curvature map must be float32 or float64, got dtype 'i4'"),
+            std::string::npos);
 }
 
 TEST(CurvatureOutput, PlyHasOneBinaryVertexPerValidQuadric) {
