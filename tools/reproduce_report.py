@@ -8,6 +8,7 @@ project guarantees fails (J-ftf below ICP-ftf in translation on most cells).
 """
 import argparse
 import json
+import math
 import os
 import re
 import shutil
@@ -645,6 +646,12 @@ def main():
         d = load_json(os.path.join(study_dir, name + ".json"))
         if d:
             study[name] = d
+    def normals(d):  # Quad IT → refined, in degrees; runs before the field: –
+        if not d or "normal_error_rad" not in d:
+            return "–"
+        return (f"{math.degrees(d['normal_error_initial_rad']):.1f} → "
+                f"{math.degrees(d['normal_error_rad']):.1f}")
+
     if study:
         w("## Bias and spread over noise draws (not in the paper)\n")
         w("`jpcr_eval noise`: one frame pair, the first step of the seed-1 room_spheres walk, "
@@ -653,7 +660,9 @@ def main():
           "in the tables above). Bias = |mean error| over the draws, in mm and mrad, with its size "
           "in standard errors of the mean; spread = RMS length of the errors about that mean; "
           "predicted = the refiner's own translation_sd / rotation_sd; step kept = the estimated "
-          "step's length along the true one, as a fraction of it (translation, rotation). "
+          "step's length along the true one, as a fraction of it (translation, rotation); "
+          "normals = the mean angle of the reference frame's quadric normals from the true "
+          "surface normals, from Quad IT → after refinement (J-ftf, Q-full). "
           "'motion ×0' renders both frames at the same pose.\n")
         revs = sorted({open(p).read().strip() for p in
                        (os.path.join(study_dir, n + ".revision") for n in study)
@@ -661,8 +670,8 @@ def main():
         if revs:
             w(f"These runs were made at revision {', '.join(f'`{r}`' for r in revs)}.\n")
         w("| method | noise | motion | draws | bias t (mm) | bias r (mrad) | spread t (mm) | "
-          "spread r (mrad) | predicted t (mm) / r (mrad) | step kept (t, r) |")
-        w("|---|---|---|---|---|---|---|---|---|---|")
+          "spread r (mrad) | predicted t (mm) / r (mrad) | step kept (t, r) | normals (deg) |")
+        w("|---|---|---|---|---|---|---|---|---|---|---|")
         for name in STUDY_RUNS:
             d = study.get(name)
             if not d:
@@ -681,7 +690,7 @@ def main():
               f"{1e3 * d['bias_rotation_rad']:.2f} ({fmt(d['bias_rotation_standard_errors'], '.1f')}) | "
               f"{1e3 * d['spread_translation_m']:.2f} | {1e3 * d['spread_rotation_rad']:.2f} | "
               f"{1e3 * d['predicted_translation_sd_m']:.2f} / "
-              f"{1e3 * d['predicted_rotation_sd_rad']:.2f} | {kept} |")
+              f"{1e3 * d['predicted_rotation_sd_rad']:.2f} | {kept} | {normals(d)} |")
         w("")
         study_cells = [(sc, k) for k in (1, 2, 3) for sc in SCENES
                  if f"icp-ftf_{sc}_range{k}" in study and f"j-ftf_{sc}_range{k}" in study]
@@ -694,8 +703,8 @@ def main():
               "as above.\n")
             w("| scene | noise | ICP-ftf t | J-ftf t | J-ftf, filtered depth t | ICP-ftf r | "
               "J-ftf r | J-ftf, filtered depth r | ratio t | ratio r | ratio t, filtered | "
-              "ratio r, filtered | J-ftf bias t / spread t |")
-            w("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+              "ratio r, filtered | J-ftf bias t / spread t | J-ftf normals (deg), raw / filtered |")
+            w("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
             better = {"j-ftf": [0, 0], "j-ftf-filtered": [0, 0]}
             for sc, k in study_cells:
                 i = study[f"icp-ftf_{sc}_range{k}"]
@@ -719,7 +728,8 @@ def main():
                   f"{mm(i, 'rms_rotation_rad')} | {mm(j, 'rms_rotation_rad')} | "
                   f"{mm(runs['j-ftf-filtered'], 'rms_rotation_rad')} | {rx('j-ftf', 0)} | "
                   f"{rx('j-ftf', 1)} | {rx('j-ftf-filtered', 0)} | {rx('j-ftf-filtered', 1)} | "
-                  f"{1e3 * j['bias_translation_m']:.2f} / {1e3 * j['spread_translation_m']:.2f} |")
+                  f"{1e3 * j['bias_translation_m']:.2f} / {1e3 * j['spread_translation_m']:.2f} | "
+                  f"{normals(j)} / {normals(runs['j-ftf-filtered'])} |")
             w("")
             n = len(study_cells)
             w(f"J-ftf's RMS error is below ICP-ftf's in {better['j-ftf'][0]} of {n} cells in "
