@@ -1,7 +1,9 @@
 #include "jpcr/io/staged_output.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <filesystem>
 #include <system_error>
 
@@ -11,6 +13,28 @@
 namespace jpcr {
 
 namespace fs = std::filesystem;
+
+namespace {
+
+// Removes the staging directories `prefix`PID in `parent` whose process no longer exists: those
+// of runs that were killed (SIGKILL, a second Ctrl-C) before they could clean up. A PID that is
+// alive, or that this process may not signal, is left alone.
+void remove_abandoned_staging(const fs::path& parent, const std::string& prefix) {
+  std::error_code ec;
+  for (const fs::directory_entry& e : fs::directory_iterator(parent, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
+    const long pid = std::stol(digits);
+    if (pid <= 0 || pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH)
+      continue;
+    std::error_code ignored;
+    fs::remove_all(e.path(), ignored);
+  }
+}
+
+}  // namespace
 
 StagedOutput::StagedOutput(std::string target, std::vector<std::string> layout)
     : target_(std::move(target)), layout_(std::move(layout)) {
@@ -23,8 +47,9 @@ StagedOutput::StagedOutput(std::string target, std::vector<std::string> layout)
   const fs::path parent = t.has_parent_path() ? t.parent_path() : fs::path(".");
   ensure_directory(parent.string());
   // A hidden sibling: renames into the target stay on one file system.
-  staging_ =
-      (parent / ("." + t.filename().string() + ".partial-" + std::to_string(::getpid()))).string();
+  const std::string prefix = "." + t.filename().string() + ".partial-";
+  remove_abandoned_staging(parent, prefix);
+  staging_ = (parent / (prefix + std::to_string(::getpid()))).string();
   fs::remove_all(staging_, ec);
   ensure_directory(staging_);
 }

@@ -3,6 +3,9 @@
 // the staged ones. A run that fails before commit() (an exception unwinds the StagedOutput)
 // removes the staging directory and leaves the target exactly as it was, so an earlier run's
 // outputs are never mixed with a new run's, and a failed run leaves nothing half written.
+// The staging directory is `.NAME.partial-PID` beside the target; one left by a process that
+// was killed outright (SIGKILL) is removed by the next StagedOutput for the same target once
+// that PID no longer exists.
 //
 //   StagedOutput out("run1", {"trajectory.txt", "curvature"});
 //   write_trajectory(out.path("trajectory.txt"), ...);   // into run1/.staging

@@ -1,3 +1,6 @@
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <filesystem>
 #include <fstream>
 
@@ -94,6 +97,33 @@ TEST(StagedOutput, BadTargetsAreInputErrorsNamingThem) {
   }
   EXPECT_THROW(StagedOutput("", {}), InputError);
   EXPECT_THROW(StagedOutput(file + "/under_a_file", {}), InputError);
+}
+
+// The PID of a child that has exited and been reaped: no process has it (until the kernel
+// hands it out again, which takes a full cycle of the PID space).
+pid_t finished_process() {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return child;
+}
+
+TEST(StagedOutput, StagingOfAKilledRunIsRemovedAndALiveOneKept) {
+  test::TempDir dir;
+  const std::string target = dir.file("run");
+  const std::string dead = dir.file(".run.partial-" + std::to_string(finished_process()));
+  const std::string alive = dir.file(".run.partial-" + std::to_string(::getppid()));
+  const std::string other = dir.file(".other.partial-" + std::to_string(finished_process()));
+  const std::string not_a_pid = dir.file(".run.partial-12ab");
+  for (const std::string& d : {dead, alive, other, not_a_pid})
+    fs::create_directories(d + "/curvature");
+  StagedOutput out(target, {});
+  EXPECT_FALSE(fs::exists(dead));      // its process is gone: abandoned by a SIGKILL
+  EXPECT_TRUE(fs::exists(alive));      // a run still going (here: our parent)
+  EXPECT_TRUE(fs::exists(other));      // another target's
+  EXPECT_TRUE(fs::exists(not_a_pid));  // not a name StagedOutput makes
+  EXPECT_TRUE(fs::exists(out.directory()));
 }
 
 }  // namespace

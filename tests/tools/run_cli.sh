@@ -63,6 +63,38 @@ expect 1 "$last" -- "$run" --dataset "$tmp/seq_bad" --method j-ftf --out "$tmp/f
 [ ! -e "$tmp/fresh" ] || { echo "FAIL: a failed run created OUT"; fail=1; }
 [ -z "$(ls -A "$tmp" | grep partial)" ] || { echo "FAIL: staging left: $(ls -A "$tmp")"; fail=1; }
 
+# Ctrl-C (SIGINT) stops the run at the next frame: exit 130, "interrupted", OUT as it was and
+# no staging left. A run killed outright (SIGKILL) leaves its staging directory, which the next
+# run into the same OUT removes. The 30-frame sequence takes seconds; the signal is sent as
+# soon as the staging directory appears, before the first frame is done.
+expect 0 "wrote 30 frames" -- "$synth" --scene room_spheres --frames 30 --size 160x120 --seed 4 \
+  --out "$tmp/long"
+wait_for_staging() {  # $1: OUT; up to 20 s
+  for _ in $(seq 200); do
+    compgen -G "$(dirname "$1")/.$(basename "$1").partial-*" > /dev/null && return 0
+    sleep 0.1
+  done
+  echo "FAIL: no staging directory for $1 appeared"; fail=1; return 1
+}
+before=$(cd "$tmp/ftf" && find . -type f | sort | xargs md5sum)
+"$run" --dataset "$tmp/long" --method j-ftf --out "$tmp/ftf" > "$tmp/int.log" 2>&1 &
+pid=$!
+wait_for_staging "$tmp/ftf" && kill -INT $pid
+wait $pid; rc=$?
+{ [ $rc = 130 ] && grep -q "interrupted: stopped by a signal at frame .* is left as it was" "$tmp/int.log"; } ||
+  { echo "FAIL: SIGINT: exit $rc, output: $(cat "$tmp/int.log")"; fail=1; }
+[ "$(cd "$tmp/ftf" && find . -type f | sort | xargs md5sum)" = "$before" ] ||
+  { echo "FAIL: an interrupted run changed OUT"; fail=1; }
+[ -z "$(ls -A "$tmp" | grep partial)" ] || { echo "FAIL: staging left after SIGINT"; fail=1; }
+"$run" --dataset "$tmp/long" --method j-ftf --out "$tmp/ftf" > /dev/null 2>&1 &
+pid=$!
+wait_for_staging "$tmp/ftf" && kill -KILL $pid
+wait $pid 2> /dev/null
+[ -n "$(ls -A "$tmp" | grep partial)" ] || { echo "FAIL: SIGKILL left no staging"; fail=1; }
+expect 0 "wrote 4 poses" -- "$run" --dataset "$tmp/seq" --method icp-ftf --out "$tmp/ftf"
+[ -z "$(ls -A "$tmp" | grep partial)" ] ||
+  { echo "FAIL: the killed run's staging was not removed: $(ls -A "$tmp")"; fail=1; }
+
 # Bad input.
 expect 2 "--out needs a non-empty value" -- "$run" --dataset "$tmp/seq" --out ""
 expect 2 "--method: unknown method 'bundle'" -- "$run" --dataset "$tmp/seq" --method bundle --out "$tmp/x"

@@ -90,4 +90,14 @@ printf 'synthetic:
 ' > "$tmp/rate.yaml"
 expect 1 "share the timestamp" -- "$synth" --params "$tmp/rate.yaml" --frames 3 --size 80x60 --out "$tmp/x"
 [ -e "$tmp/x" ] && { echo "FAIL: output written after an error"; fail=1; }
+# Ctrl-C stops at the next frame: exit 130, "interrupted", nothing written, no staging left.
+"$synth" --frames 500 --size 640x480 --out "$tmp/long" > "$tmp/int.log" 2>&1 &
+pid=$!
+for _ in $(seq 200); do compgen -G "$tmp/.long.partial-*" > /dev/null && break; sleep 0.1; done
+kill -INT $pid
+wait $pid; rc=$?
+{ [ $rc = 130 ] && grep -q "interrupted: stopped by a signal at frame .*nothing written" "$tmp/int.log"; } ||
+  { echo "FAIL: SIGINT: exit $rc, output: $(cat "$tmp/int.log")"; fail=1; }
+[ ! -e "$tmp/long" ] && [ -z "$(ls -A "$tmp" | grep partial)" ] ||
+  { echo "FAIL: an interrupted jpcr_synth left output: $(ls -A "$tmp")"; fail=1; }
 exit $fail

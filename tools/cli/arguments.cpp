@@ -5,6 +5,7 @@
 #include <iostream>
 #include <sstream>
 
+#include "cli/stop_signal.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr::cli {
@@ -173,6 +174,9 @@ int run_program(const std::string& program, const std::function<int()>& body) {
   } catch (const UsageError& e) {
     std::cerr << program << ": " << e.what() << "\nTry '" << program << " --help'.\n";
     return 2;
+  } catch (const Interrupted& e) {
+    std::cerr << program << ": interrupted: " << e.what() << '\n';
+    return 130;
   } catch (const InputError& e) {
     std::cerr << program << ": error: " << e.what() << '\n';
     return 1;

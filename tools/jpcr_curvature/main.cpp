@@ -10,6 +10,7 @@
 #include "cli/arguments.hpp"
 #include "cli/device_option.hpp"
 #include "cli/progress.hpp"
+#include "cli/stop_signal.hpp"
 #include "jpcr/cuda/curvature_estimator_factory.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/camera_yaml.hpp"
@@ -134,9 +135,12 @@ int run(int argc, char** argv) {
     std::cerr << "jpcr_curvature: " << dataset->description() << ", " << estimator->name()
               << ", frames " << range.first << ":" << range.last << '\n';
 
+    cli::install_stop_signal_handler();  // Ctrl-C stops at the next frame, OUT unchanged
     cli::Progress progress("jpcr_curvature");
     std::vector<FrameRecord> records;
     for (std::size_t i = range.first; i < range.last; ++i) {
+      cli::throw_if_stopped("frame " + std::to_string(i) + "; " + out.target() +
+                            " is left as it was");
       const Frame frame = dataset->load(i);
       const Clock::time_point t0 = Clock::now();
       const VertexMap vertices = compute_vertex_map(frame.depth, frame.camera);

@@ -13,6 +13,7 @@
 
 #include "cli/arguments.hpp"
 #include "cli/progress.hpp"
+#include "cli/stop_signal.hpp"
 #include "jpcr/frontend/keyframe_tracker.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/camera_yaml.hpp"
@@ -156,7 +157,9 @@ int run(int argc, char** argv) {
     cli::Progress progress("jpcr_odometry", start);
     Trajectory trajectory;
     std::size_t failed = 0;
+    cli::install_stop_signal_handler();  // Ctrl-C stops at the next frame, nothing written
     for (std::size_t i = 0; i < frames; ++i) {
+      cli::throw_if_stopped("frame " + std::to_string(i) + "; nothing written");
       const Frame frame = source->load(i);
       TrackResult r;
       try {

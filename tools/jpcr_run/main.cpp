@@ -10,6 +10,7 @@
 #include "cli/device_option.hpp"
 #include "cli/pipeline_options.hpp"
 #include "cli/progress.hpp"
+#include "cli/stop_signal.hpp"
 #include "jpcr/cuda/refiner_factory.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/camera_yaml.hpp"
@@ -123,8 +124,12 @@ int run_main(int argc, char** argv) {
         },
         refiners);
     self = &runner;
+    // Ctrl-C or SIGTERM stops the run at the next frame; OUT is left as it was.
+    cli::install_stop_signal_handler();
+    const std::string unchanged = "; " + out.target() + " is left as it was";
     cli::Progress progress("jpcr_run");
     for (std::size_t i = range.first; i < range.last; ++i) {
+      cli::throw_if_stopped("frame " + std::to_string(i) + unchanged);
       const PipelineFrame& f = [&]() -> const PipelineFrame& {
         try {
           return runner.add(dataset->load(i));
@@ -141,6 +146,7 @@ int run_main(int argc, char** argv) {
       progress(i - range.first + 1, range.last - range.first, extra.str());
     }
     runner.finish();
+    cli::throw_if_stopped("the end of the run" + unchanged);
 #ifdef JPCR_HAVE_DDS
     if (dds) {
       dds->finished(runner);

@@ -7,6 +7,7 @@
 
 #include "cli/arguments.hpp"
 #include "cli/progress.hpp"
+#include "cli/stop_signal.hpp"
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/params.hpp"
 #include "jpcr/io/synthetic_writer.hpp"
@@ -90,7 +91,13 @@ int run(int argc, char** argv) {
     writer.force = args.get_flag("force");
     writer.comment = command.str();
     cli::Progress progress("jpcr_synth", start);
-    writer.progress = [&progress](std::size_t done, std::size_t total) { progress(done, total); };
+    // Ctrl-C stops at the next frame and writes nothing (the writer's staging is removed).
+    cli::install_stop_signal_handler();
+    writer.progress = [&](std::size_t done, std::size_t total) {
+      cli::throw_if_stopped("frame " + std::to_string(done) + "; nothing written to " +
+                            args.get("out"));
+      progress(done, total);
+    };
     write_synthetic_sequence(sequence, args.get("out"), writer);
     std::cout << "wrote " << sequence.size() << " frames to " << args.get("out") << " in "
               << std::chrono::duration<double>(Clock::now() - start).count() << " s\n";
