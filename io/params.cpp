@@ -160,6 +160,7 @@ void read_quadric(YamlSection yaml, QuadricParams& p) {
   fit.read("curvature_tolerance", p.fit.curvature_tolerance);
   fit.finish();
   validate_in(fit, p.fit);
+  validate_in(fit, p);  // min_samples against the pattern's size
   yaml.finish();
 }
 

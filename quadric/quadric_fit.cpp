@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <limits>
 #include <stdexcept>
+#include <string>
 #include <vector>
 
 #include "jpcr/quadric/error.hpp"
@@ -219,6 +220,12 @@ void QuadricParams::validate() const {
   pattern.validate();
   normals.validate();
   fit.validate();
+  // Quad IT sees at most the pattern's samples; more required would leave every pixel invalid.
+  const int samples = NeighbourhoodPattern::make(pattern.radius, pattern.stride).size();
+  if (fit.min_samples > samples)
+    throw InputError("min_samples: " + std::to_string(fit.min_samples) + " exceeds the " +
+                     std::to_string(samples) + " samples of the pattern (radius " +
+                     std::to_string(pattern.radius) + "): no pixel could have a quadric");
 }
 
 QuadricMap CurvatureEstimator::estimate(const VertexMap& vertices) const {

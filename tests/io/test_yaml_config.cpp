@@ -118,6 +118,13 @@ TEST(Params, DuplicateKeysAndSectionsAreErrorsNamingFileLineAndKey) {
   const std::string e2 = error_of([&] { load_params(threads); });
   EXPECT_NE(e2.find(threads), std::string::npos) << e2;
   EXPECT_NE(e2.find("frontend.threads"), std::string::npos) << e2;
+  // So does one that depends on two sections: more samples than the pattern has.
+  const std::string samples =
+      dir.write("m.yaml", "quadric:\n  pattern:\n    radius: 2\n  fit:\n    min_samples: 100000\n");
+  const std::string e3 = error_of([&] { load_params(samples); });
+  EXPECT_NE(e3.find(samples + ":5: key 'quadric.fit.min_samples': 100000 exceeds the"),
+            std::string::npos)
+      << e3;
 }
 
 // Section icp_bundle: the shipped defaults are the struct's, keys map onto it and reach the

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "jpcr/quadric/error.hpp"
 #include "jpcr/quadric/least_squares_quadric.hpp"
 #include "jpcr/quadric/quadric_fit.hpp"
 #include "jpcr/quadric/se3.hpp"
@@ -158,6 +159,21 @@ TEST(QuadricFit, CurvatureIsInvariantUnderARotationOfTheVertices) {
     ASSERT_TRUE(a.valid(u, v) && b.valid(u, v));
     EXPECT_NEAR(a.curvature(u, v).x(), b.curvature(u, v).x(), 2e-3);
     EXPECT_NEAR(a.curvature(u, v).y(), b.curvature(u, v).y(), 2e-3);
+  }
+}
+
+TEST(QuadricFit, MinSamplesAboveThePatternIsRefused) {
+  QuadricParams p;  // r = 6, s = 3: 129 samples (method.md §2)
+  p.fit.min_samples = 129;
+  EXPECT_NO_THROW(p.validate());
+  p.fit.min_samples = 130;
+  try {
+    p.validate();
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("min_samples: 130 exceeds the 129 samples"),
+              std::string::npos)
+        << e.what();
   }
 }
 
