@@ -268,7 +268,7 @@ int run_noise(int argc, char** argv) {
       "(the bias) with its standard error, the spread about it, and the spread the\n"
       "method predicts. Errors: t - t_true in mm, log(R R_true^T) in mrad.");
   args.option("method", "j-ftf | q-full | icp-ftf (the front end, the peer)", "j-ftf")
-      .option("scene", "scene name or scene .yaml (jpcr_synth --list-scenes)", "room_spheres")
+      .option("scene", "scene name (jpcr_synth --help lists them) or scene .yaml", "room_spheres")
       .option("size", "image size WIDTHxHEIGHT", "320x240")
       .option("noise", "noise model: range:K (K % of the range along the ray) | kinect | none",
               "range:1")
