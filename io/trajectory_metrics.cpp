@@ -149,6 +149,7 @@ RelativeErrors compute_relative_errors(const Trajectory& ground_truth, const Tra
     const double t = error.translation().norm(), r = rotation_angle(error.linear());
     result.translation.push_back(t);
     result.rotation.push_back(r);
+    result.ground_truth_frames.emplace_back(matches[k - 1].first, matches[k].first);
     sum_t += t * t;
     sum_r += r * r;
   }

@@ -9,6 +9,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "jpcr/quadric/frame.hpp"
@@ -51,6 +52,9 @@ struct RelativeErrors {
   std::size_t pairs = 0;
   std::vector<double> translation;  // per consecutive pair, m
   std::vector<double> rotation;     // per consecutive pair, rad
+  /// Per pair, the ground-truth indices of its two frames: the key that pairs up two estimates
+  /// of the same sequence (trajectory_comparison.hpp).
+  std::vector<std::pair<std::size_t, std::size_t>> ground_truth_frames;
 };
 
 RelativeErrors compute_relative_errors(const Trajectory& ground_truth, const Trajectory& estimate,

@@ -219,6 +219,15 @@ def trajectory_errors(bin_dir, gt, run_dir):
     return json.loads(res.stdout) if res.returncode == 0 else {}
 
 
+def paired_comparison(bin_dir, gt, est, baseline):
+    """jpcr_eval traj --baseline's comparison of est with baseline (JSON "baseline"), or {}."""
+    if not all(os.path.exists(f) for f in (gt, est, baseline)):
+        return {}
+    res = subprocess.run([os.path.join(bin_dir, "jpcr_eval"), "traj", "--gt", gt, "--est", est,
+                          "--baseline", baseline, "--json"], capture_output=True, text=True)
+    return json.loads(res.stdout).get("baseline", {}) if res.returncode == 0 else {}
+
+
 def rmse(errors, *keys):
     """errors[k1][k2]...["rmse"], or None where a key (e.g. RPE per second on < 1 s) is missing."""
     for k in keys + ("rmse",):
@@ -787,6 +796,15 @@ def main():
               f"{fmt(rmse(t, 'rpe_per_second', 'rotation_deg'), '.3f')} | "
               f"{fmt(e.get('wall'), '.0f')} |")
         w("")
+        pipeline_traj = os.path.join(real, "pipeline", "trajectory.txt")
+        paired = paired_comparison(a.bin, gt, pipeline_traj, icp_traj)
+        if paired:
+            t, r = paired["translation"], paired["rotation"]
+            w(f"The pipeline against ICP-ftf, frame pair by frame pair (`jpcr_eval traj --baseline`: "
+              f"ratio of the RMS relative errors, pipeline / ICP-ftf, with a 95 % interval from a "
+              f"paired block bootstrap over {paired['pairs']} frame pairs): translation "
+              f"{t['ratio']:.3f} [{t['low']:.3f}, {t['high']:.3f}], {t['verdict']}; rotation "
+              f"{r['ratio']:.3f} [{r['low']:.3f}, {r['high']:.3f}], {r['verdict']}.\n")
         ratio = [None, None]
         if same_name in real_rows and "j-ftf" in real_rows:
             for i, q in enumerate(("translation_m", "rotation_deg")):

@@ -22,6 +22,17 @@ expect 2 "est is required" -- "$eval_bin" traj --gt "$tmp/gt.txt"
 expect 2 "unknown option --bogus" -- "$eval_bin" traj --bogus
 expect 2 "unknown command" -- "$eval_bin" frobnicate
 expect 0 "usage: jpcr_eval traj" -- "$eval_bin" traj --help
+# --baseline: a second estimate compared pair by pair; bad ones are named.
+expect 1 "missing.txt: file does not exist" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/gt.txt" --baseline "$tmp/missing.txt"
+expect 1 "gt.txt: only 3 frame pairs are common to the estimate and the baseline (need 10)" -- \
+  "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/gt.txt" --baseline "$tmp/gt.txt"
+for i in $(seq 1 30); do echo "$i $((i % 7)) $((i % 3)).$i 0 0 0 0 1"; done > "$tmp/gt30.txt"
+for i in $(seq 1 30); do echo "$i $((i % 7)).0$((i % 5)) $((i % 3)).$i 0 0.0$((i % 4)) 0 0 1"; done > "$tmp/est30.txt"
+expect 1 "baseline's relative errors are all zero" -- "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --baseline "$tmp/gt30.txt"
+expect 0 "translation 1.0000  \[1.0000, 1.0000\]  indistinguishable" -- \
+  "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --baseline "$tmp/est30.txt"
+expect 0 '"verdict": "indistinguishable"' -- \
+  "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --baseline "$tmp/est30.txt" --json
 [ -e "$tmp/report.json" ] && { echo "FAIL: partial report written"; fail=1; }
 ls "$tmp" | grep -q '\.tmp\.' && { echo "FAIL: temporary file left behind"; fail=1; }
 exit $fail

@@ -8,6 +8,7 @@
 #include "cli/arguments.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/json_writer.hpp"
+#include "jpcr/io/trajectory_comparison.hpp"
 #include "jpcr/io/trajectory_metrics.hpp"
 #include "jpcr/io/tum_lists.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -24,6 +25,7 @@ struct TrajectoryReport {
   std::optional<RpeResult> rpe_second;  // absent when the sequence is shorter than 1 s
   RelativeErrors relative;
   DriftCurve drift;
+  std::optional<PairedComparison> baseline;  // --baseline: est against it, per frame pair
 };
 
 void write_statistics(JsonWriter& json, const char* name, const ErrorStatistics& s) {
@@ -69,6 +71,18 @@ void write_json(std::ostream& out, const TrajectoryReport& r) {
   json.field("curve_translation_m", r.drift.translation);
   json.field("curve_rotation_deg", r.drift.rotation);
   json.end_object();
+  if (r.baseline) {
+    json.key("baseline").begin_object();
+    json.field("pairs", r.baseline->pairs).field("block", r.baseline->block);
+    for (const auto& [name, ratio] : {std::pair{"translation", r.baseline->translation},
+                                      std::pair{"rotation", r.baseline->rotation}}) {
+      json.key(name).begin_object();
+      json.field("ratio", ratio.ratio).field("low", ratio.low).field("high", ratio.high);
+      json.field("verdict", std::string(ratio.verdict()));
+      json.end_object();
+    }
+    json.end_object();
+  }
   json.end_object();
 }
 
@@ -107,6 +121,20 @@ void write_text(std::ostream& out, const TrajectoryReport& r) {
         100.0 * r.drift.translation_per_metre, r.drift.rotation_per_metre);
     out << line;
   }
+  if (r.baseline) {
+    const PairedComparison& c = *r.baseline;
+    std::snprintf(line, sizeof(line),
+                  "against the baseline, relative error ratio est / baseline (95 %% interval, "
+                  "paired block bootstrap over %zu frame pairs, blocks of %zu):\n",
+                  c.pairs, c.block);
+    out << line;
+    for (const auto& [name, ratio] :
+         {std::pair{"translation", c.translation}, std::pair{"rotation", c.rotation}}) {
+      std::snprintf(line, sizeof(line), "  %-11s %.4f  [%.4f, %.4f]  %s\n", name, ratio.ratio,
+                    ratio.low, ratio.high, ratio.verdict());
+      out << line;
+    }
+  }
 }
 
 }  // namespace
@@ -119,11 +147,17 @@ int run_trajectory(int argc, char** argv) {
                       "(rad), and drift against\ndistance travelled.");
   args.required("gt", "ground-truth trajectory, TUM format (timestamp tx ty tz qx qy qz qw)")
       .required("est", "estimated trajectory, TUM format")
+      .option("baseline",
+              "a second estimate of the same frames (TUM format), e.g. ICP-ftf's: est's "
+              "relative errors are compared with its on the frame pairs both have, with a 95 % "
+              "interval of the ratio (better / worse / indistinguishable)")
       .option("max-difference", "timestamp association window in seconds", "0.02")
       .option("out", "also write the JSON report to this file")
       .flag("json", "print JSON instead of text")
       .epilog(
-          "example:\n  jpcr_eval traj --gt data/groundtruth.txt --est out/trajectory.txt --json");
+          "examples:\n  jpcr_eval traj --gt data/groundtruth.txt --est out/trajectory.txt --json\n"
+          "  jpcr_eval traj --gt data/groundtruth.txt --est out/trajectory.txt \\\n"
+          "      --baseline out/front_end.txt     # the pipeline against its ICP-ftf front end");
   return cli::run_program("jpcr_eval traj", [&] {
     if (!args.parse(argc, argv)) return 0;
     const double max_difference = args.get_double("max-difference");
@@ -152,6 +186,15 @@ int run_trajectory(int argc, char** argv) {
     }
     report.relative = compute_relative_errors(gt, est, max_difference);
     report.drift = compute_drift(gt, est, max_difference);
+    if (args.has("baseline")) {
+      const Trajectory base = read_trajectory(args.get("baseline"));
+      try {
+        report.baseline = compare_relative_errors(
+            report.relative, compute_relative_errors(gt, base, max_difference));
+      } catch (const InputError& e) {
+        throw InputError(args.get("baseline") + ": " + e.what());
+      }
+    }
 
     if (args.has("out")) {
       write_file_atomically(args.get("out"), [&](std::ostream& out) { write_json(out, report); });
