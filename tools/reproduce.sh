@@ -10,7 +10,7 @@
 #                      [--real-jftf-frames N]
 #
 # Full run (default): 640x480 scenes, the report in report/ of the repository. --quick: small
-# sizes and few frames (about a minute), the report under --out, the real frames from the
+# sizes and few frames (about 2 minutes on 2 cores), the report under --out, the real frames from the
 # repository's tests/data (unless --tum), and exit status 1 unless every section is present and
 # the pose orderings hold (CI runs it: tests/tools). --no-build: use the programs already built in
 # --build. Every number in the report comes from this run; report/ is committed output of a full

@@ -33,7 +33,7 @@ expect 0 "frames: 2 compared" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$t
 # the error there below the error over every pixel (the edges are where patch fits go wrong).
 "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --json --support pattern \
   --out "$tmp/it_interior.json" > /dev/null || { echo "FAIL: eval --support"; fail=1; }
-expect 1 "--support: expected a radius" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --support -3
+expect 2 "--support: expected a radius" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --support -3
 if /usr/bin/python3 -c 'import numpy' 2>/dev/null; then
   /usr/bin/python3 - "$tmp" <<'PY' || fail=1
 import glob, json, sys, numpy as np

@@ -55,8 +55,11 @@ expect 0 "usage: jpcr_dds_echo TOPIC" -- "$echo_bin" --help
 expect 2 "dataset is required" -- "$play"
 expect 2 "missing argument TOPIC" -- "$echo_bin"
 expect 2 "encoding: unknown depth encoding 'bgr8'" -- "$play" --dataset "$tum" --encoding bgr8
-expect 2 "frames 5:2 selects no frame" -- "$play" --dataset "$tum" --config "$cam" --frames 5:2
-expect 2 "frames expects FIRST:END" -- "$play" --dataset "$tum" --config "$cam" --frames 7
+expect 2 "frames '5:2' selects no frame" -- "$play" --dataset "$tum" --config "$cam" --frames 5:2
+expect 2 "frames expects FIRST:LAST" -- "$play" --dataset "$tum" --config "$cam" --frames x7
+# A bare N is frame N alone, as in jpcr_run and jpcr_curvature.
+expect 0 "frames 7..7" -- "$play" --dataset "$tum" --config "$cam" --frames 7 --as-fast-as-possible \
+  --wait-subscribers 0
 expect 2 "rate must be in 0.001..1e6" -- "$play" --dataset "$tum" --rate 0
 expect 2 "rate must be in 0.001..1e6" -- "$play" --dataset "$tum" --rate 1e-12
 expect 2 "wait-subscribers must be 0..86400" -- "$play" --dataset "$tum" --wait-subscribers 1e10

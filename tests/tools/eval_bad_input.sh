@@ -21,6 +21,7 @@ expect 2 "max-difference must be a positive number" -- "$eval_bin" traj --gt "$t
 expect 2 "est is required" -- "$eval_bin" traj --gt "$tmp/gt.txt"
 expect 2 "unknown option --bogus" -- "$eval_bin" traj --bogus
 expect 2 "unknown command" -- "$eval_bin" frobnicate
+expect 2 "--noise: noise 'bogus'" -- "$eval_bin" noise --noise bogus
 expect 0 "usage: jpcr_eval traj" -- "$eval_bin" traj --help
 # --baseline: a second estimate compared pair by pair; bad ones are named.
 expect 1 "missing.txt: file does not exist" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/gt.txt" --baseline "$tmp/missing.txt"

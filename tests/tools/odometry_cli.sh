@@ -58,6 +58,9 @@ printf 'frontend:\n  icp:\n    max_distance: -1\n' > "$tmp/bad_params.yaml"
 printf 'frontend:\n  tracker:\n    keyframe_distance: 1\n' > "$tmp/typo_params.yaml"
 expect 1 "$bad_png" -- "$odo" --dataset "$tmp/broken" --config "$cam" --out "$tmp/x/traj.txt"
 expect 1 "nosuch: dataset does not exist" -- "$odo" --dataset "$tmp/nosuch" --config "$cam" --out "$tmp/x.txt"
+# A run that fails creates no directory for its outputs.
+expect 1 "nosuch: dataset does not exist" -- "$odo" --dataset "$tmp/nosuch" --config "$cam" --out "$tmp/newdir/x.txt"
+[ ! -e "$tmp/newdir" ] || { echo "FAIL: a failed run created the output's directory"; fail=1; }
 expect 1 "missing.yaml" -- "$odo" --dataset "$fr1" --config "$tmp/missing.yaml" --out "$tmp/x.txt"
 expect 1 "640x480" -- "$odo" --dataset "$fr1" --config "$tmp/small.yaml" --out "$tmp/x.txt"
 expect 1 "bad_params.yaml:3: key 'frontend.icp.max_distance': must be positive" -- \

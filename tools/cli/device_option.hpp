@@ -1,4 +1,5 @@
-// The --device option of the programs that refine or fit (jpcr_run, jpcr_node, jpcr_curvature):
+// The --device option of the programs that refine or fit (jpcr_run, jpcr_node, jpcr_curvature,
+// jpcr_eval noise):
 // where J-ftf and Quad IT run, on top of the parameter file's `device:` key (issue 7).
 #pragma once
 
@@ -11,10 +12,11 @@
 
 namespace jpcr::cli {
 
-inline void add_device_option(Arguments& args) {
-  args.option("device",
-              "auto | cpu | cuda: where J-ftf and Quad IT run; auto takes a usable GPU, else the "
-              "CPU (default: the parameter file's device:, auto)");
+/// `what`: the work --device places, in the program's words.
+inline void add_device_option(Arguments& args, const std::string& what = "J-ftf and Quad IT") {
+  args.option("device", "auto | cpu | cuda for " + what +
+                            "; auto takes a usable GPU, else the CPU (default: the parameter "
+                            "file's device:, auto)");
 }
 
 /// --device, else the parameter file's setting; a bad value is a UsageError.

@@ -100,7 +100,7 @@ int run(int argc, char** argv) {
   args.required("dataset", "TUM directory (jpcr_synth writes one) or MRPT .rawlog")
       .option("config", "camera YAML (default: the dataset's own camera.yaml or rawlog intrinsics)")
       .option("method", kMethodHelp, "it")
-      .option("frames", "FIRST:LAST, 0-based, LAST excluded (default: all)")
+      .option("frames", "FIRST:LAST, 0-based, LAST excluded, or N for frame N alone (default: all)")
       .required("out",
                 "output directory (created; an earlier run's maps there are replaced, other "
                 "files are left alone; nothing is written when the run fails)")
@@ -111,7 +111,7 @@ int run(int argc, char** argv) {
           "example:\n  jpcr_synth --scene room_spheres --frames 5 --noise range:1 --out seq\n"
           "  jpcr_curvature --dataset seq --method it --out seq_it\n"
           "  jpcr_eval curvature --gt seq --est seq_it");
-  cli::add_device_option(args);
+  cli::add_device_option(args, "Quad IT");
   return cli::run_program("jpcr_curvature", [&] {
     if (!args.parse(argc, argv)) return 0;
     const Params params = args.has("params") && !args.get("params").empty()

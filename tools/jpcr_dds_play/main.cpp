@@ -11,6 +11,7 @@
 
 #include "cli/arguments.hpp"
 #include "cli/dds_options.hpp"
+#include "cli/progress.hpp"
 #include "cli/stop_signal.hpp"
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/dds/dds_depth_publisher.hpp"
@@ -22,27 +23,6 @@ namespace jpcr {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-// "a:b" → the frames a, ..., b-1 of `size` (either side may be empty: start, end).
-void parse_frames(const std::string& text, std::size_t size, std::size_t& first,
-                  std::size_t& last) {
-  const auto colon = text.find(':');
-  auto number = [&](const std::string& part, std::size_t fallback) {
-    if (part.empty()) return fallback;
-    char* end = nullptr;
-    const long v = std::strtol(part.c_str(), &end, 10);
-    if (end != part.c_str() + part.size() || v < 0) {
-      throw cli::UsageError("--frames expects FIRST:END (e.g. 0:100), got '" + text + "'");
-    }
-    return std::min(static_cast<std::size_t>(v), size);
-  };
-  if (colon == std::string::npos) {
-    throw cli::UsageError("--frames expects FIRST:END (e.g. 0:100), got '" + text + "'");
-  }
-  first = number(text.substr(0, colon), 0);
-  last = number(text.substr(colon + 1), size);
-  if (first >= last) throw cli::UsageError("--frames " + text + " selects no frame");
-}
 
 // A progress line: rewritten in place on a terminal, every 10 % otherwise.
 void progress(std::size_t done, std::size_t total, Clock::time_point start) {
@@ -68,14 +48,19 @@ int run(int argc, char** argv) {
       .option("encoding", "depth encoding: 16UC1 (mm) | 32FC1 (m)", "16UC1")
       .option("rate", "playback speed relative to the recorded timestamps", "1")
       .flag("as-fast-as-possible", "publish without waiting between frames")
-      .option("frames", "FIRST:END, the frames FIRST..END-1 (either may be empty)")
-      .option("wait-subscribers", "seconds to wait for a depth subscriber before the first frame",
+      .option("frames",
+              "FIRST:LAST, 0-based, LAST excluded (either may be empty), or N for frame N "
+              "alone (default: all)")
+      .option("wait-subscribers",
+              "seconds to wait before the first frame for a subscriber of both the image and "
+              "the camera_info topic (as a ROS 2 depth consumer subscribes)",
               "2");
   cli::add_dds_options(args);
   args.epilog(
-      "example:\n  CYCLONEDDS_URI=file://$PWD/configs/cyclonedds_loopback.xml \\\n"
-      "    jpcr_dds_play --dataset data/rgbd_dataset_freiburg1_xyz --config configs/tum_fr1.yaml\n"
-      "  jpcr_dds_echo rt/camera/depth/image_raw --count 10");
+      "example (the image topic keeps no history: start the subscriber first):\n"
+      "  export CYCLONEDDS_URI=file://$PWD/configs/cyclonedds_loopback.xml\n"
+      "  jpcr_dds_echo rt/camera/depth/image_raw --count 10 &\n"
+      "  jpcr_dds_play --dataset tests/data/tum_fr1_xyz_20 --config configs/tum_fr1.yaml");
   return cli::run_program("jpcr_dds_play", [&] {
     if (!args.parse(argc, argv)) return 0;
     DepthEncoding encoding;
@@ -98,7 +83,11 @@ int run(int argc, char** argv) {
     const std::unique_ptr<FrameSource> source = open_dataset(args.get("dataset"), camera);
     std::size_t first = 0, last = source->size();
     if (source->size() == 0) throw InputError(source->description() + " has no frames");
-    if (args.has("frames")) parse_frames(args.get("frames"), source->size(), first, last);
+    if (args.has("frames")) {
+      const cli::FrameRange range = cli::parse_frame_range(args.get("frames"), source->size());
+      first = range.first;
+      last = range.last;
+    }
 
     const DdsParticipant participant(dds);
     DdsDepthPublisher publisher(participant, dds, encoding);
@@ -108,8 +97,8 @@ int run(int argc, char** argv) {
               << " (domain " << dds.domain_id << ")\n";
     const auto wait = std::chrono::milliseconds(static_cast<long long>(wait_seconds * 1000.0));
     if (!publisher.wait_for_subscribers(1, wait) && wait_seconds > 0.0) {
-      std::cerr << "jpcr_dds_play: no subscriber after " << wait_seconds
-                << " s; publishing anyway\n";
+      std::cerr << "jpcr_dds_play: no subscriber of both " << dds.depth_topic << " and "
+                << dds.camera_info_topic << " after " << wait_seconds << " s; publishing anyway\n";
     }
 
     const Clock::time_point start = Clock::now();

@@ -46,8 +46,8 @@ int support_radius(const std::string& text, int width) {
   } catch (const std::exception&) {
   }
   if (end != text.size() || r < 0)
-    throw InputError("--support: expected a radius in pixels (>= 0) or 'pattern', got '" + text +
-                     "'");
+    throw cli::UsageError("--support: expected a radius in pixels (>= 0) or 'pattern', got '" +
+                          text + "'");
   return r;
 }
 

@@ -290,7 +290,7 @@ int run_noise(int argc, char** argv) {
           "  jpcr_eval noise --noise range:3 --noise-matched --draws 8\n"
           "  jpcr_eval noise --noise range:3 --noise-matched --motion 0     # no motion\n"
           "  jpcr_eval noise --noise range:3 --noise-matched --start-offset 5,0.2");
-  cli::add_device_option(args);
+  cli::add_device_option(args, "J-ftf (Quad IT, which starts it, and ICP-ftf run on the CPU)");
   return cli::run_program("jpcr_eval noise", [&] {
     if (!args.parse(argc, argv)) return 0;
     const std::string method = args.get("method");
@@ -316,7 +316,12 @@ int run_noise(int argc, char** argv) {
     if (std::abs(offset_mm) > 1000 || std::abs(offset_deg) > 90)
       throw cli::UsageError("--start-offset must be within 1000 mm and 90 deg, got '" + offset +
                             "'");
-    const NoiseModel noise = parse_noise(args.get("noise"));
+    NoiseModel noise;
+    try {
+      noise = parse_noise(args.get("noise"));
+    } catch (const InputError& e) {
+      throw cli::UsageError(std::string("--noise: ") + e.what());
+    }
 
     Params params = args.has("params") ? load_params(args.get("params")) : Params{};
     if (args.get_flag("noise-matched")) {

@@ -14,11 +14,13 @@ constexpr const char* kUsage =
     "Evaluates jpcr results against ground truth, and studies the refiners under noise.\n\n"
     "commands:\n"
     "  traj        trajectory error: ATE, RPE per frame and per second, paper-style relative\n"
-    "              errors and drift (jpcr_eval traj --gt GT.txt --est EST.txt [--json])\n"
+    "              errors and drift (jpcr_eval traj --gt GT.txt --est EST.txt [--json]);\n"
+    "              --baseline B.txt: better, worse or indistinguishable from B\n"
     "  curvature   principal-curvature RMS error and coverage against jpcr_synth ground truth\n"
     "              (jpcr_eval curvature --gt DIR --est DIR [--json])\n"
-    "  noise       Monte-Carlo study of J-ftf / Q-full on a synthetic frame pair: bias, spread\n"
-    "              and predicted spread over noise draws (jpcr_eval noise --noise range:3)\n\n"
+    "  noise       Monte-Carlo study of J-ftf / Q-full / ICP-ftf on a synthetic frame pair:\n"
+    "              bias, spread and predicted spread over noise draws\n"
+    "              (jpcr_eval noise --noise range:3)\n\n"
     "Run 'jpcr_eval COMMAND --help' for the options of a command.\n";
 
 }  // namespace

@@ -195,7 +195,7 @@ int node_main(int argc, char** argv) {
   args.option("role", "all | frontend | backend", "all")
       .option("method",
               "pipeline | icp-ftf | j-ftf | j-full | q-full | icp-bundle (default: params)")
-      .option("window", "keyframes per J-full / Q-full window, 2-16 (default: params)")
+      .option("window", "keyframes per J-full / Q-full / ICP-bundle window, 2-16 (default: params)")
       .option("max-frames", "stop after N processed frames (0: no limit; not the back end)", "0")
       .option("idle-timeout",
               "stop when no input arrived for S seconds after the first one (0: never)", "0")

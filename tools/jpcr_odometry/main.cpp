@@ -102,11 +102,13 @@ int run(int argc, char** argv) {
               "as in configs/default.yaml)")
       .option("mode", "frame_to_frame (ICP-ftf) | frame_to_keyframe (default: the params')")
       .option("summary", "JSON summary to write (default: OUT.json)")
-      .option("frames", "use only the first N frames (0 = all)", "0")
+      .option("frames",
+              "use only the first N frames (0 = all); a count, unlike jpcr_run's FIRST:LAST", "0")
       .option("threads", "threads, the caller included (0 = one per core; default: the params')")
       .epilog(
-          "example:\n  jpcr_odometry --dataset data/tum_fr1_xyz --config configs/tum_fr1.yaml "
-          "--out out/icp.txt\n  jpcr_eval traj --gt data/tum_fr1_xyz/groundtruth.txt --est "
+          "example:\n  jpcr_odometry --dataset ../shared/data/tum_fr1_xyz_first300 "
+          "--config configs/tum_fr1.yaml --out out/icp.txt\n"
+          "  jpcr_eval traj --gt ../shared/data/tum_fr1_xyz_first300/groundtruth.txt --est "
           "out/icp.txt");
   return cli::run_program("jpcr_odometry", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -131,12 +133,9 @@ int run(int argc, char** argv) {
     // Before the run, so it fails early.
     if (std::filesystem::weakly_canonical(out) == std::filesystem::weakly_canonical(summary))
       throw cli::UsageError("--summary and --out name the same file: " + out);
-    for (const std::string& file : {out, summary}) {
+    for (const std::string& file : {out, summary})
       if (std::filesystem::is_directory(file))
         throw InputError(file + ": is a directory, not a file to write");
-      const std::string parent = std::filesystem::path(file).parent_path().string();
-      if (!parent.empty()) ensure_directory(parent);
-    }
     std::optional<CameraIntrinsics> camera;
     if (args.has("config")) camera = load_camera_yaml(args.get("config"));
     const std::string dataset = args.get("dataset");
@@ -176,6 +175,11 @@ int run(int argc, char** argv) {
     }
     run.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     run.keyframes = tracker.keyframe_indices();
+    // Missing parent directories are made only now, so a run that fails creates nothing.
+    for (const std::string& file : {out, summary}) {
+      const std::string parent = std::filesystem::path(file).parent_path().string();
+      if (!parent.empty()) ensure_directory(parent);
+    }
     // Both files or neither: the trajectory waits beside OUT until the summary is written.
     const std::string staged = out + ".partial-" + std::to_string(::getpid());
     write_trajectory(staged, trajectory, "jpcr_odometry " + run.mode + " on " + dataset);

@@ -59,7 +59,7 @@ int run_main(int argc, char** argv) {
               "pipeline | icp-ftf | j-ftf | j-full | q-full | icp-bundle (default: params)")
       .option("window", "keyframes per J-full / Q-full / ICP-bundle window, 2-16 (default: params)")
       .option("params", "parameter YAML (sections frontend, quadric, joint, icp_bundle, pipeline)")
-      .option("frames", "FIRST:LAST, 0-based, LAST excluded (default: all)")
+      .option("frames", "FIRST:LAST, 0-based, LAST excluded, or N for frame N alone (default: all)")
       .required("out",
                 "output directory (created; the outputs of an earlier run there are replaced, "
                 "other files are left alone; nothing is written when the run fails)")
@@ -73,7 +73,8 @@ int run_main(int argc, char** argv) {
       .option("cyclone-uri", "Cyclone DDS configuration with --dds, file://PATH or XML");
 #endif
   args.epilog(
-      "example:\n  jpcr_synth --scene room_spheres --frames 20 --noise range:1 --out seq\n"
+      "example (60 frames of the walk travel far enough for two keyframes):\n"
+      "  jpcr_synth --scene room_spheres --frames 60 --size 320x240 --noise range:1 --out seq\n"
       "  jpcr_run --dataset seq --out seq_run\n"
       "  jpcr_eval traj --gt seq/groundtruth.txt --est seq_run/trajectory.txt");
   return cli::run_program("jpcr_run", [&] {
