@@ -90,7 +90,7 @@ expect 2 "method expects j-ftf, q-full or icp-ftf" -- "$eval_bin" noise "${small
 expect 2 "size expects WIDTHxHEIGHT" -- "$eval_bin" noise --size 80by60
 expect 2 "noise-matched needs --noise range:K" -- "$eval_bin" noise --noise kinect --noise-matched
 expect 2 "motion must be a finite scale" -- "$eval_bin" noise "${small[@]}" --motion nan
-expect 1 "range:K\|noise" -- "$eval_bin" noise --noise range:-1
+expect 2 "range:K needs a percentage K ≥ 0" -- "$eval_bin" noise --noise range:-1
 expect 1 "bad.yaml" -- "$eval_bin" noise "${small[@]}" --params "$tmp/bad.yaml"
 expect 1 "no_such_scene" -- "$eval_bin" noise --size 80x60 --scene no_such_scene
 expect 0 "usage: jpcr_eval noise" -- "$eval_bin" noise --help
