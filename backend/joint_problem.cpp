@@ -157,7 +157,7 @@ RefinementResult run_joint_refinement(JointProblem& problem, const JointParams& 
         problem.accept();
         ++report.iterations;
         lambda = std::max(lambda / params.damping_decrease, 1e-12);
-        lin = problem.linearize(lambda);
+        problem.relinearize(lambda, lin);
         report.cost.push_back(lin.cost);
         if (too_few(lin, params))
           report.verdict = RefinementVerdict::kTooFewQuadrics;
@@ -178,10 +178,11 @@ RefinementResult run_joint_refinement(JointProblem& problem, const JointParams& 
       report.verdict = RefinementVerdict::kDiverged;
       break;
     }
-    lin = problem.linearize(lambda);
+    problem.relinearize(lambda, lin);
   }
   report.damping = lambda;
-  finish_report(problem.linearize(0.0), estimate_quadrics, out);
+  problem.relinearize(0.0, lin);
+  finish_report(lin, estimate_quadrics, out);
   const bool settled = report.verdict == RefinementVerdict::kConverged ||
                        report.verdict == RefinementVerdict::kMaxIterations;
   if (settled && report.degeneracy < params.degeneracy_threshold)

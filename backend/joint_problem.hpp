@@ -22,6 +22,10 @@ class JointProblem {
   /// damping λ on diag C_p.
   virtual ReducedSystem linearize(double lambda) = 0;
 
+  /// linearize(λ) into `out`, which holds an earlier system whose buffers an implementation
+  /// may reuse.
+  virtual void relinearize(double lambda, ReducedSystem& out) { out = linearize(lambda); }
+
   /// Back-substitutes the quadric steps for `pose_steps` (solved from `system`, which is the
   /// most recent linearize(λ)) into a candidate state and returns Σ w r² there, re-associated
   /// at the candidate poses.
@@ -41,12 +45,16 @@ class CpuJointProblem final : public JointProblem {
   CpuJointProblem(const JointSystem& system, JointState initial)
       : system_(system), state_(std::move(initial)) {}
   ReducedSystem linearize(double lambda) override { return system_.linearize(state_, lambda); }
+  void relinearize(double lambda, ReducedSystem& out) override {
+    system_.linearize(state_, lambda, out);
+  }
   double propose(const ReducedSystem& system, double lambda,
                  const std::vector<Vector6d>& pose_steps) override {
-    candidate_ = system_.step(state_, system, lambda, pose_steps);
+    system_.step(state_, system, lambda, pose_steps, candidate_);
     return candidate_.cost;
   }
-  void accept() override { state_ = std::move(candidate_.candidate); }
+  // A swap, not a move: the next propose() reuses the old state's buffers for its candidate.
+  void accept() override { std::swap(state_, candidate_.candidate); }
   const JointState& state() override { return state_; }
 
  private:

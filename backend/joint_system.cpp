@@ -1,5 +1,7 @@
 #include "jpcr/backend/joint_system.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include <Eigen/Cholesky>
@@ -20,7 +22,8 @@ std::vector<RigidMotion<double>> motions_of(const std::vector<Eigen::Isometry3d>
   return m;
 }
 
-// One thread's share of the reduced system, merged into the total at the end (double).
+// One thread's share of the reduced system, merged into the total at the end (double). Its
+// factors and active pixels are one row's, moved into the output after each row (append_rows).
 struct ReductionShare {
   explicit ReductionShare(int n, int poses)
       : S(static_cast<std::size_t>(n) * n, 0.0), s(n, 0.0), A_diagonal(n, 0.0), seen(poses, 0) {}
@@ -32,6 +35,17 @@ struct ReductionShare {
   long terms = 0;
   int active = 0;
 };
+
+// Moves a thread's row of entries to the next free place of `all` (sized for every valid pixel
+// beforehand) and empties it: no thread's buffer grows past a row, and `all` keeps its capacity
+// from one iteration to the next.
+template <typename T>
+void append_rows(std::vector<T>& row, std::vector<T>& all, std::atomic<std::size_t>& end) {
+  if (row.empty()) return;
+  const std::size_t at = end.fetch_add(row.size());
+  std::copy(row.begin(), row.end(), all.begin() + static_cast<std::ptrdiff_t>(at));
+  row.clear();
+}
 
 // The pixels are processed row by row; rows are handed out in small dynamic chunks because the
 // number of valid quadrics per row varies.
@@ -127,11 +141,23 @@ JointSystem::JointSystem(const std::vector<VertexMap>& frames, const CameraIntri
 }
 
 ReducedSystem JointSystem::linearize(const JointState& state, double lambda) const {
+  ReducedSystem out;
+  linearize(state, lambda, out);
+  return out;
+}
+
+void JointSystem::linearize(const JointState& state, double lambda, ReducedSystem& out) const {
   const int M = frames(), n = 6 * (M - 1);
   const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
   const JointWindowView<double> window{
       views_.data(), motions.data(),  M,
       camera_,       pattern_.data(), static_cast<int>(pattern_.size())};
+  const bool keep_factors = M == 2 && params_.estimate_quadrics;
+  const auto valid = static_cast<std::size_t>(
+      std::count(state.valid.begin(), state.valid.end(), static_cast<unsigned char>(1)));
+  out.factors.resize(keep_factors ? valid : 0);
+  out.fixed_active.resize(params_.estimate_quadrics ? 0 : valid);
+  std::atomic<std::size_t> factors_end{0}, fixed_end{0};
   ReductionShare total(n, M - 1);
 #pragma omp parallel
   {
@@ -140,11 +166,12 @@ ReducedSystem JointSystem::linearize(const JointState& state, double lambda) con
 #pragma omp for schedule(dynamic, kRowChunk) nowait
       for (int v = 0; v < height_; ++v) {
         if (M == 2)
-          linearize_row<2>(state, window, params_, lambda, v, width_, params_.estimate_quadrics,
-                           sampler, share);
+          linearize_row<2>(state, window, params_, lambda, v, width_, keep_factors, sampler, share);
         else
           linearize_row<kMaxWindowFrames>(state, window, params_, lambda, v, width_, false, sampler,
                                           share);
+        append_rows(share.factors, out.factors, factors_end);
+        append_rows(share.fixed_active, out.fixed_active, fixed_end);
       }
     });
 #pragma omp critical(jpcr_joint_reduce)
@@ -160,12 +187,10 @@ ReducedSystem JointSystem::linearize(const JointState& state, double lambda) con
       total.cost += share.cost;
       total.terms += share.terms;
       total.active += share.active;
-      total.factors.insert(total.factors.end(), share.factors.begin(), share.factors.end());
-      total.fixed_active.insert(total.fixed_active.end(), share.fixed_active.begin(),
-                                share.fixed_active.end());
     }
   }
-  ReducedSystem out;
+  out.factors.resize(factors_end);
+  out.fixed_active.resize(fixed_end);
   // total.S is row-major with its lower triangle filled: as a column-major map that is the upper
   // triangle of S.
   out.S = Eigen::Map<const Eigen::MatrixXd>(total.S.data(), n, n).selfadjointView<Eigen::Upper>();
@@ -175,28 +200,21 @@ ReducedSystem JointSystem::linearize(const JointState& state, double lambda) con
   out.terms = total.terms;
   out.active = total.active;
   out.seen = std::move(total.seen);
-  out.factors = std::move(total.factors);
-  out.fixed_active = std::move(total.fixed_active);
-  return out;
 }
 
-JointStep JointSystem::start_step(const JointState& state,
-                                  const std::vector<Vector6d>& pose_steps) const {
-  JointStep out;
+void JointSystem::start_step(const JointState& state, const std::vector<Vector6d>& pose_steps,
+                             JointStep& out) const {
   out.pose_steps = pose_steps;
-  out.candidate = state;
+  out.candidate = state;  // copy-assignment keeps out's buffers when the sizes agree
   for (int j = 1; j < frames(); ++j) {
     Eigen::Isometry3d T = se3_exp(pose_steps[j - 1]) * state.poses[j];  // T ← exp(Δξ^) T
     T.linear() = orthonormalize(T.linear());
     out.candidate.poses[j] = T;
   }
   out.quadric_steps.assign(state.quadrics.size(), QuadricVector<double>::Zero());
-  return out;
 }
 
-JointStep JointSystem::step_pair(const JointState& state, const ReducedSystem& system,
-                                 const std::vector<Vector6d>& pose_steps) const {
-  JointStep out = start_step(state, pose_steps);
+void JointSystem::step_pair(const ReducedSystem& system, JointStep& out) const {
   const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
   const JointWindowView<double> next{views_.data(),   moved.data(),
                                      frames(),        camera_,
@@ -208,15 +226,13 @@ JointStep JointSystem::step_pair(const JointState& state, const ReducedSystem& s
 #pragma omp for schedule(dynamic, 256)
     for (long k = 0; k < count; ++k)
       cost += step_factors(system.factors[static_cast<std::size_t>(k)], next, params_,
-                           pose_steps[0], width_, sampler, out);
+                           out.pose_steps[0], width_, sampler, out);
   });
   out.cost = cost;
-  return out;
 }
 
-JointStep JointSystem::step_fixed(const JointState& state, const ReducedSystem& system,
-                                  const std::vector<Vector6d>& pose_steps) const {
-  JointStep out = start_step(state, pose_steps);
+void JointSystem::step_fixed(const JointState& state, const ReducedSystem& system,
+                             JointStep& out) const {
   const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
   const JointWindowView<double> next{views_.data(),   moved.data(),
                                      frames(),        camera_,
@@ -233,12 +249,9 @@ JointStep JointSystem::step_fixed(const JointState& state, const ReducedSystem& 
     }
   });
   out.cost = cost;
-  return out;
 }
 
-JointStep JointSystem::step_window(const JointState& state, double lambda,
-                                   const std::vector<Vector6d>& pose_steps) const {
-  JointStep out = start_step(state, pose_steps);
+void JointSystem::step_window(const JointState& state, double lambda, JointStep& out) const {
   const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
   const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
   const int M = frames(), pattern_size = static_cast<int>(pattern_.size());
@@ -251,20 +264,30 @@ JointStep JointSystem::step_window(const JointState& state, double lambda,
   with_sampler(sampling_, pattern_size, [&](auto& sampler) {
 #pragma omp for schedule(dynamic, kRowChunk)
     for (int v = 0; v < height_; ++v)
-      cost += step_row<kMaxWindowFrames>(state, window, next, params_, lambda, pose_steps.data(), v,
-                                         width_, sampler, out);
+      cost += step_row<kMaxWindowFrames>(state, window, next, params_, lambda,
+                                         out.pose_steps.data(), v, width_, sampler, out);
   });
   out.cost = cost;
-  return out;
 }
 
 JointStep JointSystem::step(const JointState& state, const ReducedSystem& system, double lambda,
                             const std::vector<Vector6d>& pose_steps) const {
+  JointStep out;
+  step(state, system, lambda, pose_steps, out);
+  return out;
+}
+
+void JointSystem::step(const JointState& state, const ReducedSystem& system, double lambda,
+                       const std::vector<Vector6d>& pose_steps, JointStep& out) const {
+  start_step(state, pose_steps, out);
   // J-ftf keeps its factors, Q-full has no quadric step (only the candidate's cost), J-full
   // recomputes each quadric's system.
-  if (!params_.estimate_quadrics) return step_fixed(state, system, pose_steps);
-  if (frames() == 2) return step_pair(state, system, pose_steps);
-  return step_window(state, lambda, pose_steps);
+  if (!params_.estimate_quadrics)
+    step_fixed(state, system, out);
+  else if (frames() == 2)
+    step_pair(system, out);
+  else
+    step_window(state, lambda, out);
 }
 
 std::vector<int> reference_inliers(const VertexMap& reference, const NeighbourhoodPattern& pattern,

@@ -73,6 +73,9 @@ class JointSystem {
 
   /// The reduced system at `state`, with the Levenberg damping λ on C_p.
   ReducedSystem linearize(const JointState& state, double lambda) const;
+  /// The same into `out`, reusing its buffers: a refinement loop keeps one ReducedSystem, as
+  /// J-ftf's factors at 640x480 are about 90 MB, on fresh pages each iteration otherwise.
+  void linearize(const JointState& state, double lambda, ReducedSystem& out) const;
 
   /// Solves (S + λ diag A) Δξ = s with LDLT; false when it is not positive definite or the step
   /// is not finite.
@@ -84,17 +87,16 @@ class JointSystem {
   /// uses the factors kept in `system`, larger windows recompute each quadric's system.
   JointStep step(const JointState& state, const ReducedSystem& system, double lambda,
                  const std::vector<Vector6d>& pose_steps) const;
+  /// The same into `out`, reusing its buffers (the candidate state and the quadric steps).
+  void step(const JointState& state, const ReducedSystem& system, double lambda,
+            const std::vector<Vector6d>& pose_steps, JointStep& out) const;
 
  private:
-  template <int MaxFrames>
-  ReducedSystem linearize_impl(const JointState& state, double lambda) const;
-  JointStep step_pair(const JointState& state, const ReducedSystem& system,
-                      const std::vector<Vector6d>& pose_steps) const;
-  JointStep step_fixed(const JointState& state, const ReducedSystem& system,
-                       const std::vector<Vector6d>& pose_steps) const;
-  JointStep step_window(const JointState& state, double lambda,
-                        const std::vector<Vector6d>& pose_steps) const;
-  JointStep start_step(const JointState& state, const std::vector<Vector6d>& pose_steps) const;
+  void step_pair(const ReducedSystem& system, JointStep& out) const;
+  void step_fixed(const JointState& state, const ReducedSystem& system, JointStep& out) const;
+  void step_window(const JointState& state, double lambda, JointStep& out) const;
+  void start_step(const JointState& state, const std::vector<Vector6d>& pose_steps,
+                  JointStep& out) const;
 
   std::vector<VertexView> views_;
   PinholeProjection camera_;

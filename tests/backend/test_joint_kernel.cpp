@@ -1,7 +1,11 @@
 // The per-pixel joint kernel (backend/joint_pixel_kernel.hpp): analytic pose and quadric
 // Jacobians of the frame-j residual against central differences, and the Schur-complement step
 // of JointSystem against a dense solve of the full normal equations.
+#include <algorithm>
 #include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <Eigen/Cholesky>
@@ -311,6 +315,95 @@ TEST_P(SchurStep, EqualsTheDenseSolveOfTheFullSystem) {
 }
 
 INSTANTIATE_TEST_SUITE_P(TwoAndFourPoses, SchurStep, ::testing::Values(2, 4));
+
+// linearize / step into buffers that hold an earlier, larger system (another state, J-ftf's
+// factors) give what fresh ones give: the factors and active pixels are those of this state only,
+// and the candidate is this state's. J-ftf, Q-full and J-full (M = 2, 2, 3).
+JointState quadric_state(const QuadricMap& map, const std::vector<Eigen::Isometry3d>& poses,
+                         int every) {
+  JointState s;
+  s.poses = poses;
+  s.quadrics.resize(map.status.size());
+  s.valid.assign(map.status.size(), 0);
+  for (std::size_t i = 0; i < map.status.size(); i += static_cast<std::size_t>(every)) {
+    s.quadrics[i] = map.quadrics[i].cast<double>();
+    s.valid[i] = map.status[i] == QuadricStatus::kValid ? 1 : 0;
+  }
+  return s;
+}
+
+TEST(JointSystemBuffers, ReusedBuffersGiveWhatFreshOnesGive) {
+  const JointTestWindow w = render_window(3, 160, "range:1");
+  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  const double lambda = 1e-3;
+  for (const auto& [M, estimate_quadrics] : {std::pair{2, true}, {2, false}, {3, true}}) {
+    SCOPED_TRACE("M = " + std::to_string(M) + (estimate_quadrics ? "" : ", Q-full"));
+    const std::vector<VertexMap> frames(w.vertices.begin(), w.vertices.begin() + M);
+    std::vector<Eigen::Isometry3d> poses{w.truth[0]};
+    for (int j = 1; j < M; ++j)
+      poses.push_back(perturbed(w.truth[j], 0.01, 1.0, j));
+    // Every pixel's quadric, then every third: the second system is the smaller.
+    const JointState before = quadric_state(map, poses, 1), state = quadric_state(map, poses, 3);
+    const JointSystem system(frames, w.camera, pattern, JointParams{}.terms(estimate_quadrics),
+                             JointSampling::kGatheredDouble);
+    const std::vector<VertexMap> pair_frames(w.vertices.begin(), w.vertices.begin() + 2);
+    const JointSystem pair(pair_frames, w.camera, pattern, JointParams{}.terms(true),
+                           JointSampling::kGatheredDouble);  // borrows the frames
+    std::vector<Vector6d> steps;
+    ReducedSystem reused = pair.linearize(quadric_state(map, {poses[0], poses[1]}, 1), lambda);
+    ASSERT_FALSE(reused.factors.empty());
+    ASSERT_TRUE(JointSystem::solve_poses(reused, lambda, steps));
+    JointStep reused_step = system.step(before, system.linearize(before, lambda), lambda,
+                                        std::vector<Vector6d>(M - 1, Vector6d::Constant(1e-3)));
+    system.linearize(state, lambda, reused);
+    const ReducedSystem fresh = system.linearize(state, lambda);
+    ASSERT_EQ(reused.active, fresh.active);
+    ASSERT_GT(fresh.active, 100);
+    EXPECT_EQ(reused.terms, fresh.terms);
+    EXPECT_EQ(reused.seen, fresh.seen);
+    // Sums over threads in another order: equal to rounding.
+    EXPECT_NEAR(reused.cost, fresh.cost, 1e-12 * fresh.cost);
+    EXPECT_LT((reused.S - fresh.S).norm(), 1e-12 * fresh.S.norm());
+    EXPECT_LT((reused.s - fresh.s).norm(), 1e-12 * fresh.s.norm());
+    auto by_pixel = [](std::vector<PairFactors> f) {
+      std::sort(f.begin(), f.end(),
+                [](const PairFactors& a, const PairFactors& b) { return a.pixel < b.pixel; });
+      return f;
+    };
+    const std::vector<PairFactors> a = by_pixel(reused.factors), b = by_pixel(fresh.factors);
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(a.size(), M == 2 && estimate_quadrics ? static_cast<std::size_t>(fresh.active) : 0u);
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      ASSERT_EQ(a[k].pixel, b[k].pixel);
+      ASSERT_EQ(a[k].k, b[k].k);  // one pixel's factors: the same arithmetic, bit for bit
+      ASSERT_EQ(a[k].K, b[k].K);
+    }
+    std::vector<std::size_t> fa = reused.fixed_active, fb = fresh.fixed_active;
+    std::sort(fa.begin(), fa.end());
+    std::sort(fb.begin(), fb.end());
+    EXPECT_EQ(fa, fb);
+    EXPECT_EQ(fa.size(), estimate_quadrics ? 0u : static_cast<std::size_t>(fresh.active));
+
+    ASSERT_TRUE(JointSystem::solve_poses(fresh, lambda, steps));
+    system.step(state, reused, lambda, steps, reused_step);
+    const JointStep fresh_step = system.step(state, fresh, lambda, steps);
+    EXPECT_NEAR(reused_step.cost, fresh_step.cost, 1e-12 * fresh_step.cost);
+    ASSERT_EQ(reused_step.candidate.quadrics.size(), fresh_step.candidate.quadrics.size());
+    EXPECT_EQ(reused_step.candidate.valid, fresh_step.candidate.valid);
+    for (int j = 0; j < M; ++j)
+      EXPECT_TRUE(reused_step.candidate.poses[j].isApprox(fresh_step.candidate.poses[j], 1e-15));
+    double quadric_difference = 0.0;
+    for (std::size_t i = 0; i < state.valid.size(); ++i)
+      if (state.valid[i])
+        quadric_difference = std::max(
+            quadric_difference,
+            (reused_step.quadric_steps[i] - fresh_step.quadric_steps[i]).cwiseAbs().maxCoeff());
+      else
+        EXPECT_TRUE(reused_step.quadric_steps[i].isZero(0.0)) << "pixel " << i;
+    EXPECT_EQ(quadric_difference, 0.0);
+  }
+}
 
 }  // namespace
 }  // namespace jpcr
