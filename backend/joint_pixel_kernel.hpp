@@ -348,11 +348,8 @@ JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowV
     cholesky_solve<Scalar, 6>(sys.L, sys.k);
     for (int j = 0; j + 1 < w.frames && j < sys.kPoses; ++j) {
       if (!sys.seen[j]) continue;
-      for (int c = 0; c < 6; ++c) {  // column c of K_j = C⁻¹ (row c of B_j)ᵀ
-        Eigen::Matrix<Scalar, 6, 1> col = sys.B[j].row(c).transpose();
-        cholesky_solve<Scalar, 6>(sys.L, col);
-        sys.K[j].col(c) = col;
-      }
+      sys.K[j] = sys.B[j].transpose();  // K_j = C⁻¹ B_jᵀ
+      cholesky_solve_columns<Scalar, 6, 6>(sys.L, sys.K[j]);
     }
   }
   sys.active = true;

@@ -57,6 +57,31 @@ JPCR_HD void cholesky_solve(const Eigen::Matrix<Scalar, N, N>& L, Eigen::Matrix<
   }
 }
 
+/// Solves L Lᵀ X = B for the C columns of B, in place: cholesky_solve on each column with the
+/// same operations in the same order (the same result to the bit), the reciprocals of the
+/// diagonal computed once for all columns.
+template <typename Scalar, int N, int C>
+JPCR_HD void cholesky_solve_columns(const Eigen::Matrix<Scalar, N, N>& L,
+                                    Eigen::Matrix<Scalar, N, C>& B) {
+  Scalar inverse[N];
+  for (int i = 0; i < N; ++i)
+    inverse[i] = Scalar(1) / L(i, i);
+  for (int i = 0; i < N; ++i)
+    for (int c = 0; c < C; ++c) {
+      Scalar s = B(i, c);
+      for (int k = 0; k < i; ++k)
+        s -= L(i, k) * B(k, c);
+      B(i, c) = s * inverse[i];
+    }
+  for (int i = N - 1; i >= 0; --i)
+    for (int c = 0; c < C; ++c) {
+      Scalar s = B(i, c);
+      for (int k = i + 1; k < N; ++k)
+        s -= L(k, i) * B(k, c);
+      B(i, c) = s * inverse[i];
+    }
+}
+
 /// Copies the lower triangle of a symmetric matrix into its upper triangle.
 template <typename Scalar, int N>
 JPCR_HD void symmetrize_from_lower(Eigen::Matrix<Scalar, N, N>& H) {

@@ -156,6 +156,15 @@ TEST(DenseCholesky, SolvesLikeEigenAndRejectsIndefinite) {
     Eigen::Matrix<double, 6, 1> x = b;
     cholesky_solve<double, 6>(L, x);
     EXPECT_LT((H * x - b).norm(), 1e-10 * b.norm() * H.norm());
+    // Several right-hand sides at once: each column as cholesky_solve gives it, to the bit.
+    Eigen::Matrix<double, 6, 6> X = M;
+    cholesky_solve_columns<double, 6, 6>(L, X);
+    for (int c = 0; c < 6; ++c) {
+      Eigen::Matrix<double, 6, 1> column = M.col(c);
+      cholesky_solve<double, 6>(L, column);
+      EXPECT_EQ(X.col(c), column) << "column " << c;
+    }
+    EXPECT_LT((H * X - M).norm(), 1e-10 * M.norm() * H.norm());
   }
   Eigen::Matrix<double, 6, 6> S = Eigen::Matrix<double, 6, 6>::Identity();
   S(3, 3) = -1.0;
