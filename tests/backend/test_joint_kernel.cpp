@@ -1,6 +1,7 @@
 // The per-pixel joint kernel (backend/joint_pixel_kernel.hpp): analytic pose and quadric
-// Jacobians of the frame-j residual against central differences, and the Schur-complement step
-// of JointSystem against a dense solve of the full normal equations.
+// Jacobians of the frame-j residual against central differences, the Schur-complement step
+// of JointSystem against a dense solve of the full normal equations, and JointSystem's reused
+// buffers against fresh ones.
 #include <algorithm>
 #include <cmath>
 #include <string>
