@@ -14,7 +14,10 @@
 #
 #   tools/gpu-check.sh [--all]       --all builds and runs every core target and test too
 # Environment: JPCR_GPU_BUILD_DIR (default build-gpu), JPCR_CUDA_ARCH (default 90),
-# JPCR_CMAKE_ARGS (extra configure arguments), OUT (if set, logs are copied there).
+# JPCR_CMAKE_ARGS (extra configure arguments), JPCR_GPU_NCU (1: profile the 640x480 kernels
+# with ncu after the tables; default 0), JPCR_GPU_SANITIZERS (0: skip compute-sanitizer;
+# default 1), OUT (if set, every log goes there as one archive, gpu-check-logs.tgz, beside
+# the summary, gpu-check-summary.txt).
 set -uo pipefail
 cd "$(dirname "$0")/.." || exit 1
 
@@ -25,7 +28,8 @@ limit=${JPCR_STEP_LIMIT:-240}
 jobs=$(nproc)
 all=0
 [ "${1:-}" = "--all" ] && all=1
-logs=${OUT:-$build/gpu-check-logs}
+logs=$build/gpu-check-logs
+rm -rf "$logs"
 mkdir -p "$logs"
 
 declare -a summary=()
@@ -55,9 +59,14 @@ finish() {
     [ -f "$logs/$table.log" ] && { echo; cat "$logs/$table.log"; }
   done
   echo
-  echo "==== gpu-check summary ($(date -u +%FT%TZ), ${SECONDS} s)"
-  printf '%s\n' "${summary[@]}"
-  if [ "$failed" = 0 ]; then echo "gpu-check: OK"; else echo "gpu-check: FAILED"; fi
+  {
+    echo "==== gpu-check summary ($(date -u +%FT%TZ), ${SECONDS} s)"
+    printf '%s\n' "${summary[@]}"
+    if [ "$failed" = 0 ]; then echo "gpu-check: OK"; else echo "gpu-check: FAILED"; fi
+  } | tee "$logs/summary.txt"
+  if [ -n "${OUT:-}" ]; then  # one archive: the device tool brings back at most 8 files
+    tar czf "$OUT/gpu-check-logs.tgz" -C "$logs" . && cp "$logs/summary.txt" "$OUT/gpu-check-summary.txt"
+  fi
   exit "$failed"
 }
 
@@ -99,9 +108,28 @@ fi
 JPCR_CUDA_SYNC=0 step benchmark "$limit" "$build/tools/bench/bench_cuda_quadric" --runs 30
 JPCR_CUDA_SYNC=0 step benchmark-jftf "$limit" "$build/tools/bench/bench_cuda_joint" --runs 30
 
+# Where the time goes inside the 640x480 kernels (the first launches of each: double).
+# --clock-control none: the card's clocks are left as they are.
+ncu=/usr/local/cuda/bin/ncu
+[ -x "$ncu" ] || ncu=$(command -v ncu || ls /opt/nvidia/nsight-compute/*/ncu 2> /dev/null | tail -1)
+if [ "${JPCR_GPU_NCU:-0}" = 1 ] && [ -n "$ncu" ]; then
+  sections=(--section SpeedOfLight --section Occupancy --section LaunchStats
+    --section MemoryWorkloadAnalysis --section ComputeWorkloadAnalysis)
+  JPCR_CUDA_SYNC=0 step ncu-jftf "$limit" "$ncu" --clock-control none "${sections[@]}" \
+    --kernel-name regex:'linearize_pair|step_pair' --launch-count 2 \
+    "$build/tools/bench/bench_cuda_joint" --width 640 --runs 20 --warmup 1 --no-cpu
+  JPCR_CUDA_SYNC=0 step ncu-quad-it "$limit" "$ncu" --clock-control none "${sections[@]}" \
+    --kernel-name regex:'quad_it|plane_normals' --launch-count 3 \
+    "$build/tools/bench/bench_cuda_quadric" --width 640 --runs 20 --warmup 1 --no-cpu
+elif [ "${JPCR_GPU_NCU:-0}" = 1 ]; then
+  summary+=("SKIP  ncu (not found)")
+fi
+
 sanitizer=/usr/local/cuda/bin/compute-sanitizer
 [ -x "$sanitizer" ] || sanitizer=$(command -v compute-sanitizer || true)
-if [ -n "$sanitizer" ]; then
+if [ "${JPCR_GPU_SANITIZERS:-1}" = 0 ]; then
+  summary+=("SKIP  compute-sanitizer (JPCR_GPU_SANITIZERS=0)")
+elif [ -n "$sanitizer" ]; then
   for tool in memcheck initcheck; do
     step "sanitizer-$tool" "$limit" "$sanitizer" --tool "$tool" --error-exitcode 1 \
       "$build/tests/cuda/test_cuda_quadric_fit"

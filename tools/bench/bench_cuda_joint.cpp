@@ -10,7 +10,7 @@
 // candidate curvature are from double's, and the CPU row (JointSystem, median of 3) the same
 // iteration on the host. Exits 0 with a message when there is no GPU.
 //
-//   bench_cuda_joint [--runs N] [--warmup N] [--no-cpu]
+//   bench_cuda_joint [--runs N] [--warmup N] [--no-cpu] [--width 320|640]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -160,7 +160,7 @@ int main(int argc, char** argv) {
   std::printf("%-9s %7s  %-6s  %8s  %9s  %9s  %9s  %9s  %5s  %-16s  %s\n", "size", "samples",
               "type", "active", "linearize", "propose", "iteration", "refine", "steps", "verdict",
               "float vs double");
-  for (int width : {320, 640}) {
+  for (int width : o.widths) {
     gpu_rows(width, o);
     if (o.cpu) cpu_row(width);
   }

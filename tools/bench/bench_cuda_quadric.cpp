@@ -6,7 +6,7 @@
 // with normals given, double with normals on the GPU, float with normals given, and the CPU
 // QuadricFit (median of 5). Exits 0 with a message when there is no GPU.
 //
-//   bench_cuda_quadric [--runs N] [--warmup N] [--no-cpu]
+//   bench_cuda_quadric [--runs N] [--warmup N] [--no-cpu] [--width 320|640]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
               gpu.description.c_str(), o.warmup, o.runs);
   std::printf("%-9s %7s  %-6s  %-7s  %8s  %8s  %8s  %8s  %8s  %8s  %7s\n", "size", "samples",
               "type", "normals", "fit", "normals", "upload", "download", "total", "host", "valid");
-  for (int width : {320, 640}) {
+  for (int width : o.widths) {
     gpu_row(width, jpcr::CudaPrecision::kDouble, false, o);
     gpu_row(width, jpcr::CudaPrecision::kDouble, true, o);
     gpu_row(width, jpcr::CudaPrecision::kFloat, false, o);

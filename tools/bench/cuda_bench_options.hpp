@@ -1,5 +1,5 @@
 // What the GPU benchmarks (bench_cuda_quadric, bench_cuda_joint) share: the command line
-// [--runs N>=20] [--warmup N] [--no-cpu], the median and a wall clock in ms.
+// [--runs N>=20] [--warmup N] [--no-cpu] [--width 320|640], the median and a wall clock in ms.
 #pragma once
 
 #include <algorithm>
@@ -15,6 +15,7 @@ struct CudaBenchOptions {
   int runs = 30;   // timed runs per row (at least 20)
   int warmup = 5;  // untimed runs before them
   bool cpu = true;
+  std::vector<int> widths{320, 640};  // frame widths (height = 3/4 width); --width picks one
 };
 
 /// Parses the command line; returns -1 to go on, else the exit status (0 after --help, 2 for
@@ -29,10 +30,13 @@ inline int parse_cuda_bench_options(int argc, char** argv, const char* name, con
       o.warmup = std::max(1, std::atoi(argv[++i]));
     } else if (a == "--no-cpu") {
       o.cpu = false;
+    } else if (a == "--width" && i + 1 < argc && (std::atoi(argv[i + 1]) == 320 ||
+                                                  std::atoi(argv[i + 1]) == 640)) {
+      o.widths = {std::atoi(argv[++i])};
     } else {
       const bool help = a == "--help" || a == "-h";
       std::fprintf(help ? stdout : stderr,
-                   "usage: %s [--runs N>=20] [--warmup N] [--no-cpu]\n  %s\n", name, what);
+                   "usage: %s [--runs N>=20] [--warmup N] [--no-cpu] [--width 320|640]\n  %s\n", name, what);
       return help ? 0 : 2;
     }
   }
