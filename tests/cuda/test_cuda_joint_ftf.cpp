@@ -1,5 +1,9 @@
 // GPU J-ftf against the CPU reference (issue 7, label gpu; skipped without a GPU), on fresh random
 // pairs (tests/cuda/random_frames.hpp; the seed is printed, JPCR_TEST_SEED replays it):
+// The CPU side is JointSampling::kReference: sample by sample in double, the GPU's own math. (The
+// default CPU path sums in float SIMD lanes; on the H200, 2026-12-04, its S, s, diag A and cost
+// were 1.1e-8 to 1.6e-8 relative from the GPU's on every pair, and one pair's term count differed
+// by 1 in 4.6 million: float rounding, not a GPU error.)
 //   - one iteration: the reduced system S, s, diag A and the cost equal the CPU JointSystem's to
 //     1e-9 relative (double sums of the same per-pixel numbers; only the summation order and FMA
 //     contraction differ, about 1e-15 per term), the active set and the term count exactly, the
@@ -16,6 +20,8 @@
 
 #include "cuda/random_frames.hpp"
 #include "jpcr/backend/joint_frame_to_frame.hpp"
+#include "jpcr/backend/joint_problem.hpp"
+#include "jpcr/backend/joint_system.hpp"
 #include "jpcr/cuda/cuda_joint_ftf.hpp"
 #include "jpcr/cuda/refiner_factory.hpp"
 #include "jpcr/quadric/quadric_fit.hpp"
@@ -102,7 +108,8 @@ TEST(CudaJointFrameToFrame, OneIterationEqualsTheCpuReference) {
     const JointState state =
         initial_joint_state({Eigen::Isometry3d::Identity(), pair.start}, initial);
 
-    const JointSystem cpu(pair.vertices, pair.camera, pattern, params.terms(true));
+    const JointSystem cpu(pair.vertices, pair.camera, pattern, params.terms(true),
+                          JointSampling::kReference);
     const ReducedSystem cpu_lin = cpu.linearize(state, lambda);
     std::vector<Vector6d> cpu_steps;
     ASSERT_TRUE(JointSystem::solve_poses(cpu_lin, lambda, cpu_steps)) << "seed " << seed + k;
@@ -171,8 +178,12 @@ TEST(CudaJointFrameToFrame, RefinesAPairToConvergenceAsTheCpu) {
   const test::RandomPair pair = test::random_pair(seed, 320, 240);
   const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
   const std::vector<Eigen::Isometry3d> start = {Eigen::Isometry3d::Identity(), pair.start};
+  const JointSystem reference(pair.vertices, pair.camera,
+                              params.quadric.pattern.for_width(pair.camera.width),
+                              params.terms(true), JointSampling::kReference);
+  CpuJointProblem problem(reference, initial_joint_state(start, initial));
   const RefinementResult cpu =
-      JointFrameToFrame(params).refine(pair.vertices, pair.camera, start, initial);
+      run_joint_refinement(problem, params, true, "j-ftf", initial, pair.vertices[0]);
   const CudaJointFrameToFrame gpu_refiner(params);
   const RefinementResult gpu = gpu_refiner.refine(pair.vertices, pair.camera, start, initial);
   const Eigen::Isometry3d E = cpu.poses[1].inverse() * gpu.poses[1];
