@@ -123,15 +123,20 @@ void check_joint_inputs(const std::vector<VertexMap>& vertices, const CameraIntr
 
 JointState initial_joint_state(const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& map) {
   JointState s;
-  s.poses = poses;
-  s.poses[0] = Eigen::Isometry3d::Identity();
-  s.quadrics.resize(map.status.size());
-  s.valid.resize(map.status.size());
-  for (std::size_t i = 0; i < map.status.size(); ++i) {
-    s.valid[i] = map.status[i] == QuadricStatus::kValid ? 1 : 0;
-    s.quadrics[i] = map.quadrics[i].cast<double>();
-  }
+  fill_joint_state(poses, map, s);
   return s;
+}
+
+void fill_joint_state(const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& map,
+                      JointState& out) {
+  out.poses = poses;
+  if (!out.poses.empty()) out.poses[0] = Eigen::Isometry3d::Identity();
+  out.quadrics.resize(map.status.size());
+  out.valid.resize(map.status.size());
+  for (std::size_t i = 0; i < map.status.size(); ++i) {
+    out.valid[i] = map.status[i] == QuadricStatus::kValid ? 1 : 0;
+    out.quadrics[i] = map.quadrics[i].cast<double>();
+  }
 }
 
 RefinementResult run_joint_refinement(JointProblem& problem, const JointParams& params,

@@ -70,6 +70,10 @@ void check_joint_inputs(const std::vector<VertexMap>& vertices, const CameraIntr
 
 /// The initial state: the poses (T_1 set to I exactly) and the valid quadrics of `map`.
 JointState initial_joint_state(const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& map);
+/// The same into `out`, reusing its buffers (a refiner that keeps its state from pair to pair
+/// avoids fresh pages: 39 MB of quadrics at 640x480).
+void fill_joint_state(const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& map,
+                      JointState& out);
 
 /// Linearise, solve the reduced system, back-substitute, accept the step only when Σ w r² does
 /// not increase (else raise λ on diag A and diag C_p and retry), until the pose steps are below

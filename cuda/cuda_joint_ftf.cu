@@ -275,11 +275,25 @@ CudaJointSystem::~CudaJointSystem() = default;
 
 void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
                            const NeighbourhoodPattern& pattern, JointState initial) {
-  if (frames.size() != 2 || initial.poses.size() != 2)
+  state_ = std::move(initial);
+  upload(frames, camera, pattern);
+}
+
+void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
+                           const NeighbourhoodPattern& pattern,
+                           const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& initial) {
+  fill_joint_state(poses, initial, state_);
+  upload(frames, camera, pattern);
+}
+
+void CudaJointSystem::upload(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
+                             const NeighbourhoodPattern& pattern) {
+  host_quadrics_fresh_ = false;  // until the upload below has succeeded
+  if (frames.size() != 2 || state_.poses.size() != 2)
     throw std::invalid_argument("CudaJointSystem: J-ftf needs exactly two frames and two poses");
   const std::size_t pixels = frames[0].size();
-  if (frames[1].size() != pixels || initial.quadrics.size() != pixels ||
-      initial.valid.size() != pixels)
+  if (frames[1].size() != pixels || state_.quadrics.size() != pixels ||
+      state_.valid.size() != pixels)
     throw std::invalid_argument("CudaJointSystem: frames and state differ in size");
   Device& d = *device_;
   d.width = frames[0].width();
@@ -295,12 +309,11 @@ void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraInt
   JPCR_CUDA_CHECK(cudaMemcpyAsync(d.pattern.data(), pattern.offsets.data(),
                                   pattern.offsets.size() * sizeof(PixelOffset),
                                   cudaMemcpyHostToDevice, stream));
-  JPCR_CUDA_CHECK(cudaMemcpyAsync(d.quadrics.data(), initial.quadrics.data(),
+  JPCR_CUDA_CHECK(cudaMemcpyAsync(d.quadrics.data(), state_.quadrics.data(),
                                   pixels * sizeof(Quadricd), cudaMemcpyHostToDevice, stream));
-  JPCR_CUDA_CHECK(cudaMemcpyAsync(d.valid.data(), initial.valid.data(), pixels,
-                                  cudaMemcpyHostToDevice, stream));
-  JPCR_CUDA_CHECK(cudaStreamSynchronize(stream));  // `initial` is released below
-  state_ = std::move(initial);
+  JPCR_CUDA_CHECK(
+      cudaMemcpyAsync(d.valid.data(), state_.valid.data(), pixels, cudaMemcpyHostToDevice, stream));
+  JPCR_CUDA_CHECK(cudaStreamSynchronize(stream));
   host_quadrics_fresh_ = true;
   candidate_poses_ = state_.poses;
 }
@@ -476,8 +489,8 @@ RefinementResult CudaJointFrameToFrame::refine(const std::vector<VertexMap>& ver
   if (vertices.size() != 2) throw std::invalid_argument("j-ftf: needs exactly two frames");
   check_joint_inputs(vertices, camera, initial_poses, initial_quadrics);
   std::lock_guard<std::mutex> lock(mutex_);
-  system_->load(vertices, camera, params_.quadric.pattern.for_width(camera.width),
-                initial_joint_state(initial_poses, initial_quadrics));
+  system_->load(vertices, camera, params_.quadric.pattern.for_width(camera.width), initial_poses,
+                initial_quadrics);
   return run_joint_refinement(*system_, params_, true, name(), initial_quadrics, vertices[0]);
 }
 

@@ -50,6 +50,11 @@ class CudaJointSystem final : public JointProblem {
   /// caller) and its initial state {I, T₂} with one quadric per reference pixel.
   void load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
             const NeighbourhoodPattern& pattern, JointState initial);
+  /// The same from the poses {I, T₂} and Quad IT's map, converted into the state kept from the
+  /// last pair (fill_joint_state: no fresh host pages when the size is unchanged).
+  void load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
+            const NeighbourhoodPattern& pattern, const std::vector<Eigen::Isometry3d>& poses,
+            const QuadricMap& initial);
 
   ReducedSystem linearize(double lambda) override;  // factors stay on the device (empty here)
   double propose(const ReducedSystem& system, double lambda,
@@ -75,6 +80,8 @@ class CudaJointSystem final : public JointProblem {
   void launch_linearize(double lambda);
   template <typename Scalar>
   void launch_step(const Vector6d& pose_step);
+  void upload(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
+              const NeighbourhoodPattern& pattern);  // the frames, pattern and state_
 
   JointTermParams params_;
   CudaPrecision precision_;

@@ -21,6 +21,8 @@
 
 #include "cuda_bench_options.hpp"
 #include "joint_bench_window.hpp"
+#include "jpcr/backend/joint_problem.hpp"
+#include "jpcr/backend/joint_system.hpp"
 #include "jpcr/cuda/cuda_joint_ftf.hpp"
 #include "jpcr/cuda/device_selection.hpp"
 
@@ -66,6 +68,53 @@ double kappa_rms(const std::vector<jpcr::Quadricd>& a, const std::vector<jpcr::Q
   return n > 0 ? std::sqrt(sum / n) : NAN;
 }
 
+template <typename F>
+double median_ms(int runs, F&& f) {
+  std::vector<double> ms;
+  for (int i = 0; i < runs; ++i) {
+    const auto start = std::chrono::steady_clock::now();
+    f();
+    ms.push_back(ms_since(start));
+  }
+  return median(ms);
+}
+
+// Where refine()'s time goes, stage by stage (each the median of `runs` on its own): the load
+// (the float map converted into the kept double state, then the uploads), every linearisation
+// (the first, one per step tried, the final undamped one) and proposal at the event times of
+// the iteration rows, the download of the refined quadrics, the host's count of the reference
+// frame's inliers (refined_map), and the rest (6x6 solves, covariance, the refined map's copy).
+// Leaves `system` loaded with the window and one step accepted.
+std::string refine_breakdown(jpcr::CudaJointSystem& system, const jpcr::bench::JointBenchWindow& w,
+                             const jpcr::NeighbourhoodPattern& pattern,
+                             const jpcr::JointParams& params, const jpcr::RefinementReport& report,
+                             double refine_ms, double lin_ms, double propose_ms, int runs) {
+  jpcr::JointState kept;
+  const double fill = median_ms(runs, [&] { fill_joint_state(w.state.poses, w.initial, kept); });
+  const double fresh = median_ms(runs, [&] { initial_joint_state(w.state.poses, w.initial); });
+  const double load = median_ms(
+      runs, [&] { system.load(w.vertices, w.camera, pattern, w.state.poses, w.initial); });
+  const double download = median_ms(runs, [&] {
+    iterate(system, params.initial_damping);
+    system.accept();  // the host copy is stale: state() downloads
+    system.state();
+  });
+  const double inliers = median_ms(runs, [&] {
+    jpcr::reference_inliers(w.vertices[0], pattern, params.terms(true), system.state());
+  });
+  const int tried = report.iterations + report.rejected_steps;
+  const double rest = refine_ms - load - (tried + 2) * lin_ms - tried * propose_ms -
+                      (download - lin_ms - propose_ms) - inliers;
+  char text[400];
+  std::snprintf(text, sizeof text,
+                "          refine = load %.2f (of which the state %.2f; %.2f into fresh memory) + "
+                "%d linearisations x %.3f + %d proposals x %.3f + download %.2f + reference "
+                "inliers (host) %.2f + rest %.2f; %d rejected steps\n",
+                load, fill, fresh, tried + 2, lin_ms, tried, propose_ms,
+                download - lin_ms - propose_ms, inliers, rest, report.rejected_steps);
+  return text;
+}
+
 void gpu_rows(int width, const jpcr::bench::CudaBenchOptions& o) {
   const jpcr::JointParams params = params_at(width);
   const jpcr::bench::JointBenchWindow w = jpcr::bench::make_joint_window(width, 2, params.quadric);
@@ -102,6 +151,9 @@ void gpu_rows(int width, const jpcr::bench::CudaBenchOptions& o) {
       r = refiner.refine(w.vertices, w.camera, start, w.initial);
       refine_ms.push_back(ms_since(t0));
     }
+    const std::string breakdown =
+        refine_breakdown(system, w, pattern, params, r.report, median(refine_ms), median(lin_ms),
+                         median(propose_ms), o.runs);
     std::string accuracy = "-";
     if (is_double) {
       reference = first;
@@ -116,6 +168,7 @@ void gpu_rows(int width, const jpcr::bench::CudaBenchOptions& o) {
                 width * 3 / 4, pattern.size(), is_double ? "double" : "float", active,
                 median(lin_ms), median(propose_ms), median(wall), median(refine_ms),
                 r.report.iterations, jpcr::to_string(r.report.verdict), accuracy.c_str());
+    std::printf("%s", breakdown.c_str());
   }
 }
 
