@@ -95,8 +95,17 @@ dim3 grid_for(const VertexView& view) {
               (view.height + kBlockHeight - 1) / kBlockHeight);
 }
 
+// Blocks per SM that the register budget must allow (ptxas caps the registers at
+// 65536 / (256 · this)). 1 gives the double kernel its 211 registers and no spills, but only 8
+// warps per SM; 2 caps it at 128 registers with 0.4 KB of spills per thread (to L1) and 16 warps.
+// On the H200 (2026-12-04, 640x480, median of 30): 1.71 ms with 1, 1.22 ms with 2 (float, 120
+// registers either way: 0.80 / 0.82 ms). Settable for measuring (-DJPCR_QUAD_IT_MIN_BLOCKS=N).
+#ifndef JPCR_QUAD_IT_MIN_BLOCKS
+#define JPCR_QUAD_IT_MIN_BLOCKS 2
+#endif
+
 template <typename Scalar>
-__global__ void __launch_bounds__(kBlockWidth* kBlockHeight)
+__global__ void __launch_bounds__(kBlockWidth* kBlockHeight, JPCR_QUAD_IT_MIN_BLOCKS)
     quad_it_parameter_pattern(const __grid_constant__ ParameterPattern pattern, VertexView vertices,
                               const Eigen::Vector3f* __restrict__ normals, QuadricFitParams params,
                               QuadricMapView out) {
