@@ -3,7 +3,7 @@
 # nvcc 13; Eigen, GTest, Google Benchmark, yaml-cpp and CUDA only):
 #   configure the core profile with CUDA for sm_90, build the GPU targets, run the GPU tests
 #   (ctest label gpu: Quad IT and J-ftf parity, plus device selection), time the benchmark
-#   tables (bench_cuda_quadric, bench_cuda_joint), run compute-sanitizer memcheck and initcheck
+#   tables (bench_cuda_quadric, bench_cuda_joint), run compute-sanitizer memcheck, initcheck and racecheck
 #   on both GPU test binaries, then print the tables again and a summary last; the exit status is
 #   0 only when every step passed.
 # Time: the whole check stays inside JPCR_GPU_CHECK_BUDGET seconds (default 570, a 10-minute
@@ -130,7 +130,7 @@ sanitizer=/usr/local/cuda/bin/compute-sanitizer
 if [ "${JPCR_GPU_SANITIZERS:-1}" = 0 ]; then
   summary+=("SKIP  compute-sanitizer (JPCR_GPU_SANITIZERS=0)")
 elif [ -n "$sanitizer" ]; then
-  for tool in memcheck initcheck; do
+  for tool in memcheck initcheck racecheck; do
     step "sanitizer-$tool" "$limit" "$sanitizer" --tool "$tool" --error-exitcode 1 \
       "$build/tests/cuda/test_cuda_quadric_fit"
     # J-ftf: one iteration against the CPU and three short refinements (the kernels, every

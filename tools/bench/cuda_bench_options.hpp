@@ -30,13 +30,14 @@ inline int parse_cuda_bench_options(int argc, char** argv, const char* name, con
       o.warmup = std::max(1, std::atoi(argv[++i]));
     } else if (a == "--no-cpu") {
       o.cpu = false;
-    } else if (a == "--width" && i + 1 < argc && (std::atoi(argv[i + 1]) == 320 ||
-                                                  std::atoi(argv[i + 1]) == 640)) {
+    } else if (a == "--width" && i + 1 < argc &&
+               (std::atoi(argv[i + 1]) == 320 || std::atoi(argv[i + 1]) == 640)) {
       o.widths = {std::atoi(argv[++i])};
     } else {
       const bool help = a == "--help" || a == "-h";
       std::fprintf(help ? stdout : stderr,
-                   "usage: %s [--runs N>=20] [--warmup N] [--no-cpu] [--width 320|640]\n  %s\n", name, what);
+                   "usage: %s [--runs N>=20] [--warmup N] [--no-cpu] [--width 320|640]\n  %s\n",
+                   name, what);
       return help ? 0 : 2;
     }
   }
