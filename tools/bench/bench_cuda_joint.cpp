@@ -11,6 +11,7 @@
 // iteration on the host. Exits 0 with a message when there is no GPU.
 //
 //   bench_cuda_joint [--runs N] [--warmup N] [--no-cpu] [--width 320|640]
+//                    [--noise-matched]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -31,9 +32,9 @@ namespace {
 using jpcr::bench::median;
 using jpcr::bench::ms_since;
 
-jpcr::JointParams params_at(int width) {
+jpcr::JointParams params_at(int width, const jpcr::bench::CudaBenchOptions& o) {
   jpcr::JointParams params;
-  params.quadric.pattern.reference_width = width;  // the reference 129-sample pattern
+  jpcr::bench::bench_quadric_params(width, o, params.quadric);
   return params;
 }
 
@@ -116,7 +117,7 @@ std::string refine_breakdown(jpcr::CudaJointSystem& system, const jpcr::bench::J
 }
 
 void gpu_rows(int width, const jpcr::bench::CudaBenchOptions& o) {
-  const jpcr::JointParams params = params_at(width);
+  const jpcr::JointParams params = params_at(width, o);
   const jpcr::bench::JointBenchWindow w = jpcr::bench::make_joint_window(width, 2, params.quadric);
   const jpcr::NeighbourhoodPattern pattern = params.quadric.pattern.for_width(width);
   const double lambda = params.initial_damping;
@@ -172,8 +173,8 @@ void gpu_rows(int width, const jpcr::bench::CudaBenchOptions& o) {
   }
 }
 
-void cpu_row(int width) {
-  const jpcr::JointParams params = params_at(width);
+void cpu_row(int width, const jpcr::bench::CudaBenchOptions& o) {
+  const jpcr::JointParams params = params_at(width, o);
   const jpcr::bench::JointBenchWindow w = jpcr::bench::make_joint_window(width, 2, params.quadric);
   const jpcr::NeighbourhoodPattern pattern = params.quadric.pattern.for_width(width);
   const jpcr::JointSystem system(w.vertices, w.camera, pattern, params.terms(true));
@@ -208,14 +209,15 @@ int main(int argc, char** argv) {
                 gpu.description.c_str());
     return 0;
   }
-  std::printf("J-ftf on %s: %d warm-up, median of %d runs (ms)\n", gpu.description.c_str(),
-              o.warmup, o.runs);
+  std::printf("J-ftf on %s: %d warm-up, median of %d runs (ms)%s\n", gpu.description.c_str(),
+              o.warmup, o.runs,
+              o.noise_matched ? "; n0 = gate = 0.03 m per m of range (--noise-matched)" : "");
   std::printf("%-9s %7s  %-6s  %8s  %9s  %9s  %9s  %9s  %5s  %-16s  %s\n", "size", "samples",
               "type", "active", "linearize", "propose", "iteration", "refine", "steps", "verdict",
               "float vs double");
   for (int width : o.widths) {
     gpu_rows(width, o);
-    if (o.cpu) cpu_row(width);
+    if (o.cpu) cpu_row(width, o);
   }
   std::printf(
       "linearize, propose = CUDA events (kernels + the reduced sums' download); iteration = "

@@ -7,6 +7,7 @@
 // QuadricFit (median of 5). Exits 0 with a message when there is no GPU.
 //
 //   bench_cuda_quadric [--runs N] [--warmup N] [--no-cpu] [--width 320|640]
+//                      [--noise-matched]
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -49,7 +50,7 @@ Inputs frames(int width, const jpcr::QuadricParams& params) {
 void gpu_row(int width, jpcr::CudaPrecision precision, bool device_normals,
              const jpcr::bench::CudaBenchOptions& o) {
   jpcr::QuadricParams params;
-  params.pattern.reference_width = width;  // the reference 129-sample pattern at every size
+  jpcr::bench::bench_quadric_params(width, o, params);
   const Inputs in = frames(width, params);
   const jpcr::CudaQuadricFit fit(params, precision);
   for (int i = 0; i < o.warmup; ++i)
@@ -77,9 +78,9 @@ void gpu_row(int width, jpcr::CudaPrecision precision, bool device_normals,
               median(download), median(total), median(host), 100.0 * valid / in.vertices[0].size());
 }
 
-void cpu_row(int width) {
+void cpu_row(int width, const jpcr::bench::CudaBenchOptions& o) {
   jpcr::QuadricParams params;
-  params.pattern.reference_width = width;
+  jpcr::bench::bench_quadric_params(width, o, params);
   const Inputs in = frames(width, params);
   const jpcr::QuadricFit fit(params);
   fit.estimate(in.vertices[0], in.normals[0]);
@@ -115,7 +116,7 @@ int main(int argc, char** argv) {
     gpu_row(width, jpcr::CudaPrecision::kDouble, false, o);
     gpu_row(width, jpcr::CudaPrecision::kDouble, true, o);
     gpu_row(width, jpcr::CudaPrecision::kFloat, false, o);
-    if (o.cpu) cpu_row(width);
+    if (o.cpu) cpu_row(width, o);
   }
   std::printf(
       "fit = the Quad IT kernel; normals = the plane-normal kernel (gpu) or given (computed "
