@@ -273,8 +273,25 @@ CudaJointSystem::CudaJointSystem(const JointTermParams& params, CudaPrecision pr
 
 CudaJointSystem::~CudaJointSystem() = default;
 
+namespace {
+
+// Throws std::invalid_argument unless two frames of one size, two poses and one quadric and one
+// validity flag per pixel: checked before load() touches anything, so a rejected pair leaves the
+// loaded one as it was.
+void check_pair(const std::vector<VertexMap>& frames, std::size_t poses, std::size_t quadrics,
+                std::size_t valid) {
+  if (frames.size() != 2 || poses != 2)
+    throw std::invalid_argument("CudaJointSystem: J-ftf needs exactly two frames and two poses");
+  const std::size_t pixels = frames[0].size();
+  if (frames[1].size() != pixels || quadrics != pixels || valid != pixels)
+    throw std::invalid_argument("CudaJointSystem: frames and state differ in size");
+}
+
+}  // namespace
+
 void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
                            const NeighbourhoodPattern& pattern, JointState initial) {
+  check_pair(frames, initial.poses.size(), initial.quadrics.size(), initial.valid.size());
   state_ = std::move(initial);
   upload(frames, camera, pattern);
 }
@@ -282,19 +299,14 @@ void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraInt
 void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
                            const NeighbourhoodPattern& pattern,
                            const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& initial) {
+  check_pair(frames, poses.size(), initial.status.size(), initial.status.size());
   fill_joint_state(poses, initial, state_);
   upload(frames, camera, pattern);
 }
 
 void CudaJointSystem::upload(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
                              const NeighbourhoodPattern& pattern) {
-  host_quadrics_fresh_ = false;  // until the upload below has succeeded
-  if (frames.size() != 2 || state_.poses.size() != 2)
-    throw std::invalid_argument("CudaJointSystem: J-ftf needs exactly two frames and two poses");
   const std::size_t pixels = frames[0].size();
-  if (frames[1].size() != pixels || state_.quadrics.size() != pixels ||
-      state_.valid.size() != pixels)
-    throw std::invalid_argument("CudaJointSystem: frames and state differ in size");
   Device& d = *device_;
   d.width = frames[0].width();
   d.height = frames[0].height();

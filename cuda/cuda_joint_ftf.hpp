@@ -81,7 +81,7 @@ class CudaJointSystem final : public JointProblem {
   template <typename Scalar>
   void launch_step(const Vector6d& pose_step);
   void upload(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
-              const NeighbourhoodPattern& pattern);  // the frames, pattern and state_
+              const NeighbourhoodPattern& pattern);  // the frames, pattern and state_ (checked)
 
   JointTermParams params_;
   CudaPrecision precision_;

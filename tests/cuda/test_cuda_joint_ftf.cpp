@@ -255,6 +255,32 @@ TEST(CudaJointFrameToFrame, RejectsBadInputLikeTheCpu) {
                std::invalid_argument);
 }
 
+// A pair that load() rejects leaves the loaded one as it was (the checks come before any copy);
+// the reduction is deterministic, so the system linearises to the same numbers, bit for bit.
+TEST(CudaJointFrameToFrame, ARejectedLoadKeepsTheLoadedPair) {
+  SKIP_WITHOUT_GPU();
+  const test::RandomPair pair = test::random_pair(announce_seed(), 160, 120);
+  const JointParams params;
+  const NeighbourhoodPattern pattern = params.quadric.pattern.for_width(pair.camera.width);
+  const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
+  const std::vector<Eigen::Isometry3d> poses = {Eigen::Isometry3d::Identity(), pair.start};
+  CudaJointSystem gpu(params.terms(true));
+  gpu.load(pair.vertices, pair.camera, pattern, poses, initial);
+  const ReducedSystem before = gpu.linearize(params.initial_damping);
+  ASSERT_GT(before.active, 0);
+  EXPECT_THROW(gpu.load({pair.vertices[0]}, pair.camera, pattern, poses, initial),
+               std::invalid_argument);
+  EXPECT_THROW(gpu.load(pair.vertices, pair.camera, pattern, {poses[0]}, initial),
+               std::invalid_argument);
+  EXPECT_THROW(gpu.load(pair.vertices, pair.camera, pattern, poses, QuadricMap(80, 60)),
+               std::invalid_argument);
+  const ReducedSystem after = gpu.linearize(params.initial_damping);
+  EXPECT_EQ(after.active, before.active);
+  EXPECT_EQ(after.cost, before.cost);
+  EXPECT_TRUE(after.S == before.S);
+  EXPECT_TRUE(gpu.state().poses[1].isApprox(pair.start, 0.0));
+}
+
 TEST(CudaJointFrameToFrame, AnEmptyPairHasTooFewQuadricsAsOnTheCpu) {
   SKIP_WITHOUT_GPU();
   const CameraIntrinsics camera = synthetic_camera(160, 120);
