@@ -2,9 +2,9 @@
 // random frames CudaQuadricFit equals fit_quadric_pixel<double> run on the host with the same
 // normals — curvature RMS ≤ 1e-4 1/m over pixels valid in both, status equal except at ≤ 0.1 %
 // of pixels (samples exactly at the gate may fall either way) — and writes every output element
-// (outputs are pre-filled with a sentinel). With the normals computed on the device, at most 1
-// pixel in 10⁴ may differ by more than 1e-4 1/m (see that test). Device buffers are reused across
-// frames.
+// (outputs are pre-filled with a sentinel). With the normals computed on the device, at most
+// max(1, pixels / 10⁵) pixels may differ by more than 1e-4 1/m (see that test). Device buffers are
+// reused across frames.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -134,9 +134,10 @@ TEST(CudaQuadricFit, MatchesTheReferenceKernelOnRandomFrames) {
 // the host's in the last bit at 6-8 % of the pixels (FMA contraction), and plane_normal's
 // eigenvector is ill-conditioned where the neighbourhood is nearly a line, so at a few pixels
 // Quad IT starts from a visibly different normal and ends elsewhere: on the H200 (2026-12-04)
-// one 640x480 frame of six had a curvature RMS of 2.0e-3 1/m over all pixels (one pixel off by
-// about 1.5 1/m gives that; 1.3e-7 to 2.3e-7 on the others). So here at most 1 pixel in 10⁴ may
-// differ by more than kFlip, and the others must meet the RMS bound.
+// one 640x480 frame of seven had a curvature RMS of 2.0e-3 1/m over all pixels: one pixel off by
+// 1.54 1/m, the same in every replay (1.75e-7 without it; 1.0e-7 to 2.3e-7 on the other frames).
+// So here at most max(1, pixels / 10⁵) pixels may differ by more than kFlip (1 at 320x240, 3 at
+// 640x480: three times the worst seen), and the others must meet the RMS bound.
 
 TEST(CudaQuadricFit, NormalsOnTheDeviceGiveTheSameMapAsCpuNormals) {
   SKIP_WITHOUT_GPU();
@@ -158,7 +159,7 @@ TEST(CudaQuadricFit, NormalsOnTheDeviceGiveTheSameMapAsCpuNormals) {
         w, h, p.rms, p.max, p.over, kFlip, p.rms_rest, p.status_differ, p.pixels,
         fit.last_timing().normals_ms, fit.last_timing().kernel_ms);
     EXPECT_GT(p.valid_both, p.pixels / 3) << "seed " << seed;
-    EXPECT_LE(p.over, p.pixels / 10000) << "seed " << seed;
+    EXPECT_LE(p.over, std::max(1, p.pixels / 100000)) << "seed " << seed;
     EXPECT_LE(p.rms_rest, kFlip) << "seed " << seed;
     EXPECT_LE(p.status_differ, p.pixels / 1000) << "seed " << seed;
   }
