@@ -138,7 +138,6 @@ TEST(CudaQuadricFit, MatchesTheReferenceKernelOnRandomFrames) {
 // 1.54 1/m, the same in every replay (1.75e-7 without it; 1.0e-7 to 2.3e-7 on the other frames).
 // So here at most max(1, pixels / 10⁵) pixels may differ by more than kFlip (1 at 320x240, 3 at
 // 640x480: three times the worst seen), and the others must meet the RMS bound.
-
 TEST(CudaQuadricFit, NormalsOnTheDeviceGiveTheSameMapAsCpuNormals) {
   SKIP_WITHOUT_GPU();
   const QuadricParams params;
