@@ -18,6 +18,8 @@ const char* to_string(RefinementVerdict verdict) {
       return "no_overlap";
     case RefinementVerdict::kDegenerate:
       return "degenerate";
+    case RefinementVerdict::kError:
+      return "error";
   }
   return "unknown";
 }

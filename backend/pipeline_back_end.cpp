@@ -19,16 +19,27 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-bool usable(RefinementVerdict v) {
-  return v == RefinementVerdict::kConverged || v == RefinementVerdict::kMaxIterations;
-}
-
 // A refinement whose poses can be used: converged, or still improving at the iteration cap.
 bool usable(const RefinementResult& r) {
   if (!usable(r.report.verdict)) return false;
   for (const Eigen::Isometry3d& T : r.poses)
     if (!T.matrix().allFinite()) return false;
   return true;
+}
+
+// A refiner that throws (out of memory, a device error) gives a failed refinement that says why,
+// so that the run goes on with the front end's motion as after any other failed refinement.
+RefinementResult refine_or_report(const Refiner& refiner, const std::vector<Frame>& frames,
+                                  const std::vector<Eigen::Isometry3d>& initial) {
+  try {
+    return refiner.refine(frames, initial);
+  } catch (const std::exception& e) {
+    RefinementResult r;
+    r.report.method = refiner.name();
+    r.report.verdict = RefinementVerdict::kError;
+    r.report.error = e.what();
+    return r;
+  }
 }
 
 // Keyframe poses are chains of compositions, and each window composes its first pose with the
@@ -118,6 +129,12 @@ const PipelineFrame& PipelineBackEnd::add(const PipelineFrame& tracked, const Fr
     throw InputError("frame " + std::to_string(tracked.index) + " arrived as frame " +
                      std::to_string(frame_count()) + " (frames lost or reordered)");
   if (!keyframe && keyframe_count() == 0) throw InputError("the first frame must be a keyframe");
+  // Every keyframe must come from the first one's camera, checked before anything changes.
+  if (keyframe && keyframe_camera_ && !same_pinhole(keyframe->camera, *keyframe_camera_))
+    throw InputError("keyframe of frame " + std::to_string(tracked.index) + ": camera " +
+                     describe(keyframe->camera) + " differs from the first keyframe's, " +
+                     describe(*keyframe_camera_));
+  if (keyframe && !keyframe_camera_) keyframe_camera_ = keyframe->camera;
   if (keyframe) on_keyframe(*keyframe, tracked);
   frames_.push_back(tracked);
   frames_.back().keyframe = static_cast<int>(keyframe_count()) - 1;
@@ -211,16 +228,15 @@ void PipelineBackEnd::refine_pair() {
   PipelineKeyframe& a = keyframe_at(window_->keyframes[n - 2]);
   PipelineKeyframe& b = keyframe_at(window_->keyframes[n - 1]);
   const Eigen::Isometry3d initial = a.refined.pose.inverse() * b.refined.pose;
-  const RefinementResult r =
-      pair_refiner_->refine(std::vector<Frame>{window_->frames[n - 2], window_->frames[n - 1]},
-                            {Eigen::Isometry3d::Identity(), initial});
+  const RefinementResult r = refine_or_report(
+      *pair_refiner_, std::vector<Frame>{window_->frames[n - 2], window_->frames[n - 1]},
+      {Eigen::Isometry3d::Identity(), initial});
   b.pair = r.report;
+  b.used_front_end = !usable(r);
   if (usable(r)) {
     b.refined.pose = rigid(a.refined.pose * r.poses[1]);
     window_->quadrics[n - 2] = r.quadrics;
     window_->sources[n - 2] = pair_refiner_->name();
-  } else {
-    b.used_front_end = true;
   }
   b.refine_ms += ms_since(t0);
 }
@@ -234,19 +250,22 @@ void PipelineBackEnd::refine_window() {
   std::vector<Eigen::Isometry3d> initial;
   for (int k : window_->keyframes)
     initial.push_back(first.refined.pose.inverse() * keyframe_at(k).refined.pose);
-  const RefinementResult r = window_refiner_->refine(window_->frames, initial);
+  const RefinementResult r = refine_or_report(*window_refiner_, window_->frames, initial);
   PipelineKeyframe& last = keyframe_at(window_->keyframes[n - 1]);
   last.window = r.report;
-  if (usable(r)) {
-    const Eigen::Isometry3d anchor = first.refined.pose;
-    for (std::size_t j = 1; j < n; ++j)
-      keyframe_at(window_->keyframes[j]).refined.pose = rigid(anchor * r.poses[j]);
-    if (r.quadrics.width() > 0) {
-      window_->quadrics[0] = r.quadrics;
-      window_->sources[0] = window_refiner_->name();
+  const Eigen::Isometry3d anchor = first.refined.pose;
+  for (std::size_t j = 1; j < n; ++j) {
+    PipelineKeyframe& k = keyframe_at(window_->keyframes[j]);
+    if (usable(r)) {
+      k.refined.pose = rigid(anchor * r.poses[j]);
+      k.used_front_end = false;
+    } else if (!pair_refiner_) {
+      k.used_front_end = true;  // with J-ftf, its pose (or its failure) stands
     }
-  } else {
-    last.used_front_end = true;
+  }
+  if (usable(r) && r.quadrics.width() > 0) {
+    window_->quadrics[0] = r.quadrics;
+    window_->sources[0] = window_refiner_->name();
   }
   last.refine_ms += ms_since(t0);
   final_keyframes_ = keyframe_count();  // the window's last keyframe is the newest

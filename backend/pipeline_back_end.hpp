@@ -91,7 +91,9 @@ struct PipelineKeyframe {
   std::optional<RefinementReport> pair;
   /// J-full / Q-full of the window this keyframe is the last frame of.
   std::optional<RefinementReport> window;
-  bool used_front_end = false;  // a refinement failed here, so the front end's motion was kept
+  /// No refinement that covers the keyframe succeeded, so its pose is the front end's motion
+  /// from the previous keyframe (after a failed J-ftf, a J-full window can still move it).
+  bool used_front_end = false;
   double refine_ms = 0.0;
   /// Whose quadrics gave the keyframe's curvature map: the refiner's name ("j-ftf", "j-full",
   /// "q-full"), or "quad-it" where no refinement gave the keyframe quadrics (J-full refines
@@ -137,6 +139,9 @@ class PipelineBackEnd {
   /// Appends the next tracked frame (`tracked.index` = frames().size(); its `keyframe` field is
   /// set here). `keyframe` is the frame's depth when the front end made it a keyframe (the first
   /// frame always is), else null; a keyframe is refined when it completes a pair or a window.
+  /// Throws InputError, with nothing changed, for a frame out of order and for a keyframe whose
+  /// camera differs from the first keyframe's. A refiner that throws does not reach the caller:
+  /// the refinement's verdict is kError and the keyframe keeps the front end's motion.
   const PipelineFrame& add(const PipelineFrame& tracked, const Frame* keyframe);
   /// Refines what is left (the last partial window) and hands every frame still open to the
   /// FrameSink; call once after the last frame.
@@ -186,6 +191,7 @@ class PipelineBackEnd {
   FrameSink frame_sink_;
   std::unique_ptr<Refiner> pair_refiner_, window_refiner_;
   std::unique_ptr<Window> window_;
+  std::optional<CameraIntrinsics> keyframe_camera_;  // the first keyframe's: every keyframe's
   std::vector<PipelineFrame> frames_;
   std::vector<PipelineKeyframe> keyframes_;
   std::size_t first_frame_ = 0, first_keyframe_ = 0;  // indices of frames_[0], keyframes_[0]

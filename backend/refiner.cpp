@@ -15,14 +15,9 @@
 
 namespace jpcr {
 
-namespace {
-
-bool same_camera(const CameraIntrinsics& a, const CameraIntrinsics& b) {
-  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.width == b.width &&
-         a.height == b.height;
+bool usable(RefinementVerdict verdict) {
+  return verdict == RefinementVerdict::kConverged || verdict == RefinementVerdict::kMaxIterations;
 }
-
-}  // namespace
 
 PoseSpread pose_spread(const Matrix6d& covariance, const Eigen::Isometry3d& pose) {
   Eigen::Matrix<double, 3, 6> J;  // δt = [I, −[t]×] ξ
@@ -70,7 +65,7 @@ std::vector<VertexMap> window_vertex_maps(const std::vector<Frame>& frames,
   const CameraIntrinsics& camera = frames[0].camera;
   std::vector<VertexMap> vertices;
   for (const Frame& f : frames) {
-    if (!same_camera(f.camera, camera))
+    if (!same_pinhole(f.camera, camera))
       throw std::invalid_argument(method + ": the frames differ in size or intrinsics");
     vertices.push_back(compute_vertex_map(f.depth, camera));  // throws on a size mismatch
   }

@@ -32,15 +32,22 @@ enum class RefinementVerdict {
   kNoOverlap,       // ICP-bundle: a frame overlaps no frame tied to the reference (isolated)
   kDegenerate,      // the poses' system is near singular (a plane, a corridor): some motion of
                     // the camera is not observed, so the poses cannot be trusted
+  kError,           // the refiner threw (out of memory, a device error); the report's `error`
+                    // says what. The pipeline reports it and keeps the front end's motion.
 };
 
-/// "converged", "max_iterations", "diverged", "too_few_quadrics", "no_overlap", "degenerate".
+/// "converged", "max_iterations", "diverged", "too_few_quadrics", "no_overlap", "degenerate",
+/// "error".
 const char* to_string(RefinementVerdict verdict);
+
+/// Converged, or still improving at the iteration cap: a result whose poses the pipeline uses.
+bool usable(RefinementVerdict verdict);
 
 /// Whether a result can be trusted (architecture.md: every result says so).
 struct RefinementReport {
   std::string method;  // "j-ftf", "j-full", "q-full" or "icp-bundle"
   RefinementVerdict verdict = RefinementVerdict::kDiverged;
+  std::string error;               // kError: what the refiner threw; empty otherwise
   int iterations = 0;              // accepted steps
   int rejected_steps = 0;          // steps that raised the cost (then damped and retried)
   std::vector<double> cost;        // Σ w r² (m²) at the start and after each accepted step;

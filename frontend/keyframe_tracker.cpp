@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <stdexcept>
+#include <string>
+
+#include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
 
@@ -63,6 +66,10 @@ bool KeyframeTracker::is_good(const IcpResult& icp) const {
 }
 
 TrackResult KeyframeTracker::track(const Frame& frame) {
+  if (frames_ > 0 && !same_pinhole(frame.camera, camera_))
+    throw InputError("frame " + std::to_string(frames_) + " (t = " +
+                     std::to_string(frame.timestamp) + "): camera " + describe(frame.camera) +
+                     " differs from the first frame's, " + describe(camera_));
   TrackResult r;
   r.index = frames_;
   r.T_wc.timestamp = frame.timestamp;
@@ -73,6 +80,7 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
 
   const TrackerParams& tp = params_.tracker;
   if (frames_ == 0) {
+    camera_ = frame.camera;
     r.T_wc.pose = initial_pose_;
     r.is_keyframe = true;
   } else {

@@ -44,7 +44,8 @@ class KeyframeTracker {
   explicit KeyframeTracker(const FrontendParams& params = {},
                            const Eigen::Isometry3d& initial_pose = Eigen::Isometry3d::Identity());
 
-  /// Tracks the next frame. Throws InputError when the frame's size differs from the camera's.
+  /// Tracks the next frame. Throws InputError, before the frame counts, when the frame's size
+  /// differs from its camera's or its camera from the first frame's.
   TrackResult track(const Frame& frame);
 
   bool has_keyframe() const { return keyframe_.pyramid != nullptr; }
@@ -60,6 +61,7 @@ class KeyframeTracker {
   FrontendParams params_;
   std::unique_ptr<RowPool> pool_;
   Eigen::Isometry3d initial_pose_;
+  CameraIntrinsics camera_;  // the first frame's: every frame's
   int frames_ = 0;
   Keyframe keyframe_;
   std::vector<int> keyframe_indices_;

@@ -1,6 +1,7 @@
 #include "jpcr/quadric/camera.hpp"
 
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -54,6 +55,18 @@ CameraIntrinsics CameraIntrinsics::resized(int new_width, int new_height) const 
   c.width = new_width;
   c.height = new_height;
   return c;
+}
+
+bool same_pinhole(const CameraIntrinsics& a, const CameraIntrinsics& b) {
+  return a.fx == b.fx && a.fy == b.fy && a.cx == b.cx && a.cy == b.cy && a.width == b.width &&
+         a.height == b.height;
+}
+
+std::string describe(const CameraIntrinsics& camera) {
+  std::ostringstream s;
+  s << camera.width << 'x' << camera.height << ", fx " << camera.fx << ", fy " << camera.fy
+    << ", cx " << camera.cx << ", cy " << camera.cy;
+  return s.str();
 }
 
 }  // namespace jpcr

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <array>
+#include <string>
 
 #include <Eigen/Core>
 
@@ -30,6 +31,13 @@ struct CameraIntrinsics {
   /// The same camera rendered at another resolution (principal point and focal length scaled).
   CameraIntrinsics resized(int new_width, int new_height) const;
 };
+
+/// Whether two cameras give the same vertex maps: the same image size and pinhole (fx, fy, cx,
+/// cy). Frames of one refinement, and of one tracked stream, must share them.
+bool same_pinhole(const CameraIntrinsics& a, const CameraIntrinsics& b);
+
+/// "640x480, fx 525, fy 525, cx 319.5, cy 239.5", for error messages.
+std::string describe(const CameraIntrinsics& camera);
 
 /// Back-projects pixel (u, v) with depth z (metres) to a camera-frame point.
 template <typename Scalar>

@@ -4,11 +4,13 @@
 // move the poses by fixed offsets, so that every refinement changes what it touches and the test
 // runs in milliseconds (under AddressSanitizer too).
 #include <algorithm>
+#include <new>
 #include <stdexcept>
 #include <string>
 
 #include <gtest/gtest.h>
 
+#include "input_error.hpp"
 #include "jpcr/backend/pipeline_back_end.hpp"
 #include "jpcr/frontend/frame_pyramid.hpp"
 
@@ -78,6 +80,64 @@ class RecordingRefiner : public Refiner {
   std::unique_ptr<Refiner> inner_;
   std::vector<DepthImage>* seen_;
 };
+
+// Fails the calls (counted from 0) listed in `fails`: with a failed verdict and the initial
+// poses, or by throwing as a refiner out of memory or device does.
+class FailingRefiner : public Refiner {
+ public:
+  enum class How { kVerdict, kThrow };
+  FailingRefiner(std::unique_ptr<Refiner> inner, std::vector<int> fails, How how)
+      : inner_(std::move(inner)), fails_(std::move(fails)), how_(how) {}
+  RefinementResult refine(const std::vector<Frame>& frames,
+                          const std::vector<Eigen::Isometry3d>& initial) const override {
+    if (std::find(fails_.begin(), fails_.end(), calls_++) == fails_.end())
+      return inner_->refine(frames, initial);
+    if (how_ == How::kThrow) throw std::runtime_error("device lost");
+    RefinementResult r;
+    r.report.method = name();
+    r.report.verdict = RefinementVerdict::kDiverged;
+    r.poses = initial;
+    return r;
+  }
+  RefinementResult refine(const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
+                          const std::vector<Eigen::Isometry3d>& initial,
+                          const QuadricMap& quadrics) const override {
+    return inner_->refine(vertices, camera, initial, quadrics);
+  }
+  std::string name() const override { return inner_->name(); }
+  const JointParams& params() const override { return inner_->params(); }
+
+ private:
+  std::unique_ptr<Refiner> inner_;
+  std::vector<int> fails_;
+  How how_;
+  mutable int calls_ = 0;
+};
+
+// Stand-in refiners whose pair (j-ftf) and window calls listed fail as `how` says.
+RefinerFactory failing(std::vector<int> pair_fails, std::vector<int> window_fails,
+                       FailingRefiner::How how) {
+  return [=](const std::string& name, const JointParams& j, const IcpBundleParams& b) {
+    return std::make_unique<FailingRefiner>(shifting(name, j, b),
+                                            name == "j-ftf" ? pair_fails : window_fails, how);
+  };
+}
+
+// Keyframe k of a straight walk, 1 cm per keyframe along z.
+PipelineFrame walk_frame(int k) {
+  PipelineFrame f;
+  f.index = k;
+  f.front_end.timestamp = 0.1 * k;
+  f.front_end.pose = Eigen::Translation3d(0.0, 0.0, 0.01 * k) * Eigen::Isometry3d::Identity();
+  return f;
+}
+
+// The keyframe's refined motion from the previous one minus the front end's (m).
+Eigen::Vector3d correction(const PipelineBackEnd& b, std::size_t k) {
+  const PipelineKeyframe &a = b.keyframe(k - 1), &c = b.keyframe(k);
+  return (a.refined.pose.inverse() * c.refined.pose).translation() -
+         (a.front_end.pose.inverse() * c.front_end.pose).translation();
+}
 
 struct Emitted {
   int index = 0;
@@ -294,6 +354,91 @@ TEST(PipelineHistory, FilteredDepthGivesTheRefinersTheFrontEndsBilateralFilter) 
     // The filter changed the depth (else the test would not tell the two apart).
     EXPECT_FALSE(std::equal(expected.data(), expected.data() + 40 * 30, keyframe.depth.data()) &&
                  filtered);
+  }
+}
+
+// A refiner that throws (out of memory, a lost GPU) is a failed refinement that says why: the
+// keyframe keeps the front end's motion, and the next pair is refined as usual.
+TEST(PipelineHistory, ARefinerThatThrowsIsAFailedRefinementAndTheRunGoesOn) {
+  PipelineParams p;
+  p.method = PipelineMethod::kJointFtf;
+  PipelineBackEnd back_end(p, CurvatureSink{}, failing({1}, {}, FailingRefiner::How::kThrow));
+  const Frame keyframe;
+  for (int k = 0; k < 4; ++k)
+    back_end.add(walk_frame(k), &keyframe);
+  back_end.finish();
+  const PipelineKeyframe& failed = back_end.keyframe(2);
+  ASSERT_TRUE(failed.pair.has_value());
+  EXPECT_EQ(failed.pair->verdict, RefinementVerdict::kError);
+  EXPECT_EQ(failed.pair->method, "j-ftf");
+  EXPECT_NE(failed.pair->error.find("device lost"), std::string::npos) << failed.pair->error;
+  EXPECT_TRUE(failed.used_front_end);
+  EXPECT_FALSE(back_end.verdicts(2).trusted());
+  EXPECT_LT(correction(back_end, 2).norm(), 1e-12);
+  for (std::size_t k : {1, 3}) {  // the stand-in j-ftf moves x by 1 mm
+    EXPECT_EQ(back_end.keyframe(k).pair->verdict, RefinementVerdict::kConverged) << k;
+    EXPECT_FALSE(back_end.keyframe(k).used_front_end) << k;
+    EXPECT_NEAR(correction(back_end, k).x(), 1e-3, 1e-12) << k;
+  }
+}
+
+// A keyframe from another camera (the split back end takes keyframes over DDS) is refused before
+// the back end changes: the same frame from the right camera is then taken as usual.
+TEST(PipelineHistory, AKeyframeFromAnotherCameraIsRefusedAndTheBackEndStaysAsItWas) {
+  PipelineParams p;
+  p.method = PipelineMethod::kJointFull;
+  p.window = 3;
+  PipelineBackEnd back_end(p, CurvatureSink{}, shifting);
+  Frame keyframe;
+  keyframe.camera = CameraIntrinsics{}.resized(64, 48);
+  Frame other = keyframe;
+  other.camera = keyframe.camera.resized(32, 24);
+  back_end.add(walk_frame(0), &keyframe);
+  back_end.add(walk_frame(1), &keyframe);
+  const std::string error = test::input_error_of([&] { back_end.add(walk_frame(2), &other); });
+  EXPECT_NE(error.find("keyframe of frame 2"), std::string::npos) << error;
+  EXPECT_NE(error.find("32x24"), std::string::npos) << error;
+  EXPECT_EQ(back_end.frame_count(), 2u);
+  EXPECT_EQ(back_end.keyframe_count(), 2u);
+  back_end.add(walk_frame(2), &keyframe);  // completes the window of 3
+  ASSERT_TRUE(back_end.keyframe(2).window.has_value());
+  EXPECT_EQ(back_end.keyframe(2).window->verdict, RefinementVerdict::kConverged);
+  EXPECT_NEAR(correction(back_end, 2).y(), 2e-3, 1e-12);  // the stand-in window: y + 2 mm · j
+}
+
+// used_front_end says whether the keyframe's pose is the front end's motion from the previous
+// keyframe, i.e. no refinement that covers it succeeded.
+TEST(PipelineHistory, UsedFrontEndSaysWhetherNoRefinementMovedTheKeyframe) {
+  const Frame keyframe;
+  PipelineParams p;
+  p.window = 3;
+  {  // pipeline: J-ftf of keyframe 1 fails, its window succeeds and moves it
+    p.method = PipelineMethod::kPipeline;
+    PipelineBackEnd b(p, CurvatureSink{}, failing({0}, {}, FailingRefiner::How::kVerdict));
+    for (int k = 0; k < 3; ++k)
+      b.add(walk_frame(k), &keyframe);
+    EXPECT_EQ(b.keyframe(1).pair->verdict, RefinementVerdict::kDiverged);
+    EXPECT_FALSE(b.keyframe(1).used_front_end);
+    EXPECT_GT(correction(b, 1).norm(), 1e-3);
+  }
+  {  // pipeline: the window fails, keyframe 2 keeps its J-ftf pose
+    PipelineBackEnd b(p, CurvatureSink{}, failing({}, {0}, FailingRefiner::How::kVerdict));
+    for (int k = 0; k < 3; ++k)
+      b.add(walk_frame(k), &keyframe);
+    EXPECT_EQ(b.keyframe(2).window->verdict, RefinementVerdict::kDiverged);
+    EXPECT_FALSE(b.keyframe(2).used_front_end);
+    EXPECT_NEAR(correction(b, 2).x(), 1e-3, 1e-12);
+  }
+  {  // J-full alone: a failed window leaves every keyframe after its gauge on the front end
+    p.method = PipelineMethod::kJointFull;
+    PipelineBackEnd b(p, CurvatureSink{}, failing({}, {0}, FailingRefiner::How::kVerdict));
+    for (int k = 0; k < 3; ++k)
+      b.add(walk_frame(k), &keyframe);
+    EXPECT_FALSE(b.keyframe(0).used_front_end);
+    for (std::size_t k : {1, 2}) {
+      EXPECT_TRUE(b.keyframe(k).used_front_end) << k;
+      EXPECT_LT(correction(b, k).norm(), 1e-12) << k;
+    }
   }
 }
 

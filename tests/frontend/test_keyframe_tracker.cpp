@@ -1,7 +1,10 @@
 // The tracker: ICP-ftf along the synthetic drift rig (rail, 10 mm per frame, noise-free), the
 // keyframe policy, and a failed frame that keeps the last good motion and says so.
+#include <string>
+
 #include <gtest/gtest.h>
 
+#include "input_error.hpp"
 #include "jpcr/frontend/keyframe_tracker.hpp"
 #include "jpcr/io/synthetic_sequence.hpp"
 #include "jpcr/io/trajectory_metrics.hpp"
@@ -126,6 +129,24 @@ TEST(KeyframeTracker, WrongSizedFrameIsAnInputError) {
   EXPECT_THROW(tracker.track(f), InputError);
   EXPECT_FALSE(tracker.has_keyframe());
   EXPECT_THROW(tracker.keyframe(), std::logic_error);
+}
+
+// A frame from another camera (here a resized stream) is refused before the tracker counts it,
+// so the next frame of the first camera is tracked as if it never came.
+TEST(KeyframeTracker, AFrameFromAnotherCameraIsRefusedAndTrackingGoesOn) {
+  const SyntheticSequence seq = rail(3);
+  KeyframeTracker tracker(FrontendParams{}, seq.ground_truth(0).value());
+  tracker.track(seq.load(0));
+  Frame other = seq.load(1);
+  other.camera = other.camera.resized(other.camera.width / 2, other.camera.height / 2);
+  other.depth = DepthImage(other.camera.width, other.camera.height, 1.0f);
+  const std::string error = test::input_error_of([&] { tracker.track(other); });
+  EXPECT_NE(error.find("frame 1"), std::string::npos) << error;
+  EXPECT_NE(error.find("camera"), std::string::npos) << error;
+  const TrackResult r = tracker.track(seq.load(1));
+  EXPECT_EQ(r.index, 1);
+  EXPECT_EQ(r.icp.verdict, IcpVerdict::ok);
+  EXPECT_LT(test::translation_error(r.T_wc.pose, seq.ground_truth(1).value()), 0.5e-3);
 }
 
 TEST(KeyframeTracker, InvalidParamsAreRejected) {

@@ -16,6 +16,11 @@ double Progress::seconds() const {
   return std::chrono::duration<double>(Clock::now() - start_).count();
 }
 
+void Progress::note(const std::string& message) const {
+  std::fprintf(stderr, "%s%s: %s\n", terminal_ ? "\r\033[K" : "", program_.c_str(),
+               message.c_str());
+}
+
 void Progress::operator()(std::size_t done, std::size_t total, const std::string& extra) {
   if (total == 0) return;
   const bool tenth = done == 1 || done * 10 / total != (done - 1) * 10 / total;

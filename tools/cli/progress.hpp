@@ -16,6 +16,10 @@ class Progress {
   /// Reports `done` of `total` items; `extra` is appended (e.g. the last frame's verdict).
   void operator()(std::size_t done, std::size_t total, const std::string& extra = "");
 
+  /// Prints "<program>: <message>" on a line of its own (clearing the progress line on a
+  /// terminal; the next report redraws it).
+  void note(const std::string& message) const;
+
   double seconds() const;
 
  private:

@@ -141,6 +141,11 @@ int run_main(int argc, char** argv) {
 #ifdef JPCR_HAVE_DDS
       if (dds) dds->frame_added(runner, f);
 #endif
+      const PipelineKeyframe& k = runner.keyframes().back();
+      for (const std::optional<RefinementReport>* r : {&k.pair, &k.window})
+        if (k.frame == f.index && *r && (*r)->verdict == RefinementVerdict::kError)
+          progress.note("frame " + std::to_string(i) + ": " + (*r)->method + " failed (" +
+                        (*r)->error + "); the front end's motion is kept");
       std::ostringstream extra;
       extra << "keyframes " << runner.keyframes().size() << "  icp " << to_string(f.icp_verdict)
             << (f.kept_last_motion ? " (kept last motion)" : "");

@@ -34,8 +34,9 @@ void write_refinement(JsonWriter& json, const char* name,
       .field("step_translation_sd_m", r->step_translation_sd)  // successive frames
       .field("step_rotation_sd_rad", r->step_rotation_sd)
       .field("isolated_frames",  // icp-bundle: window frames left as given (no overlap)
-             std::vector<double>(r->isolated.begin(), r->isolated.end()))
-      .end_object();
+             std::vector<double>(r->isolated.begin(), r->isolated.end()));
+  if (!r->error.empty()) json.field("error", r->error);  // verdict "error": what was thrown
+  json.end_object();
 }
 
 void write_errors(JsonWriter& json, const char* name, const std::optional<TrajectoryErrors>& e) {
@@ -78,13 +79,20 @@ void write_report(std::ostream& out, const std::string& dataset, const KeyframeP
       .field("seconds", seconds);
   write_errors(json, "front_end_errors", front_end);
   write_errors(json, "errors", refined);
-  std::size_t failed_tracking = 0, failed_refinement = 0;
+  std::size_t failed_tracking = 0, failed_refinement = 0, on_front_end = 0;
   for (const PipelineFrame& f : p.frames())
     failed_tracking += f.kept_last_motion ? 1 : 0;
-  for (const PipelineKeyframe& k : p.keyframes())
-    failed_refinement += k.used_front_end ? 1 : 0;
+  const auto failed = [](const std::optional<RefinementReport>& r) {
+    return r && !usable(r->verdict);
+  };
+  for (const PipelineKeyframe& k : p.keyframes()) {
+    failed_refinement += failed(k.pair) || failed(k.window) ? 1 : 0;
+    on_front_end += k.used_front_end ? 1 : 0;
+  }
   json.field("frames_with_failed_tracking", failed_tracking)
-      .field("keyframes_with_failed_refinement", failed_refinement);
+      .field("keyframes_with_failed_refinement", failed_refinement)
+      // no refinement that covers them succeeded: their poses are the front end's motion
+      .field("keyframes_on_front_end_motion", on_front_end);
   json.key("frame_records").begin_array();
   for (const PipelineFrame& f : p.frames()) {
     json.begin_object()
@@ -116,8 +124,9 @@ void write_verdicts(std::ostream& out, const KeyframePipeline& p) {
          "# timestamp front_end pair window trusted\n"
          "# front_end: ICP-ftf, ok | degenerate | diverged | too_few_points\n"
          "# pair: J-ftf of the frame's keyframe, window: J-full/Q-full that refined it last,\n"
-         "#   converged | max_iterations | diverged | too_few_quadrics | degenerate | - (did not "
-         "run)\n"
+         "#   converged | max_iterations | diverged | too_few_quadrics | no_overlap | degenerate "
+         "|\n"
+         "#   error (the refiner threw; report.json says what) | - (did not run)\n"
          "# trusted: yes when front_end is ok and every refinement converged or hit "
          "max_iterations\n";
   const auto refinement = [](const std::optional<RefinementVerdict>& v) {
