@@ -5,8 +5,12 @@
 namespace jpcr {
 
 void IcpBundleParams::validate() const {
-  if (grid_stride < 1) throw InputError("grid_stride: must be at least 1 (px)");
-  if (normal_offset < 1) throw InputError("normal_offset: must be at least 1 (px)");
+  // Both are pixel distances in images at most 16384 px wide (CameraIntrinsics::validate); the
+  // bound also keeps their products with the width inside int.
+  if (grid_stride < 1 || grid_stride > 16384)
+    throw InputError("grid_stride: must be in [1, 16384] (px)");
+  if (normal_offset < 1 || normal_offset > 16384)
+    throw InputError("normal_offset: must be in [1, 16384] (px)");
   if (!(normal_max_jump > 0.0f)) throw InputError("normal_max_jump: must be > 0");
   if (!(min_overlap > 0.0 && min_overlap <= 1.0))
     throw InputError("min_overlap: must be in (0, 1]");

@@ -55,6 +55,8 @@ std::string read_file(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + ": file does not exist");
   if (std::filesystem::is_directory(path, ec)) throw InputError(path + ": is a directory");
+  // A FIFO would block and a device (/dev/zero) never end: only regular files are read.
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": not a regular file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot be opened (" + std::strerror(errno) + ")");
   std::ostringstream ss;

@@ -17,7 +17,8 @@ void write_file_atomically(const std::string& path,
 /// Creates `dir` and its parents when missing; throws InputError naming it on failure.
 void ensure_directory(const std::string& dir);
 
-/// Reads a whole file into memory; throws InputError naming it when it cannot be read.
+/// Reads a whole regular file into memory; throws InputError naming it when it cannot be read
+/// or is not a regular file (a FIFO, a device).
 std::string read_file(const std::string& path);
 
 }  // namespace jpcr

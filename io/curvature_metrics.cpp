@@ -42,7 +42,11 @@ Image<unsigned char> interior_mask(const CurvatureImage& gt, int R) {
 
 CurvatureErrorAccumulator::CurvatureErrorAccumulator(int support_radius)
     : support_radius_(support_radius) {
-  if (support_radius < 0) throw InputError("support radius: must be >= 0 pixels");
+  // Images are at most 16384 px wide (CameraIntrinsics::validate), so a larger radius leaves
+  // no interior pixel; the bound also keeps u + R and 2R + 1 far from int overflow.
+  if (support_radius < 0 || support_radius > kMaxSupportRadius)
+    throw InputError("support radius: must be in 0.." + std::to_string(kMaxSupportRadius) +
+                     " pixels, got " + std::to_string(support_radius));
 }
 
 void CurvatureErrorAccumulator::add(const CurvatureImage& gt, const CurvatureImage& est) {

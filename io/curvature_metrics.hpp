@@ -30,7 +30,9 @@ struct CurvatureErrors {
 /// Accumulates frames; throws InputError when a frame's sizes differ.
 class CurvatureErrorAccumulator {
  public:
-  /// `support_radius` R in pixels (0: every ground-truth pixel counts).
+  static constexpr int kMaxSupportRadius = 16384;
+  /// `support_radius` R in pixels, 0..kMaxSupportRadius (0: every ground-truth pixel counts);
+  /// throws InputError outside that range.
   explicit CurvatureErrorAccumulator(int support_radius = 0);
 
   void add(const CurvatureImage& ground_truth, const CurvatureImage& estimate);

@@ -6,6 +6,7 @@
 // Every file is written atomically.
 #pragma once
 
+#include <set>
 #include <string>
 
 #include "jpcr/io/curvature_colors.hpp"
@@ -37,6 +38,8 @@ void save_curvature_png(const std::string& path, const CurvatureImage& curvature
 class CurvatureWriter {
  public:
   CurvatureWriter(std::string directory, bool ply, const CurvatureColorParams& colors = {});
+  /// Writes curvature/STAMP.npy, curvature_png/STAMP.png (and ply/STAMP.ply). Throws InputError
+  /// for a stamp already written, rather than overwrite that map.
   void write(const std::string& stamp, const QuadricMap& map, const VertexMap& vertices) const;
   std::size_t written() const { return written_; }
 
@@ -45,6 +48,7 @@ class CurvatureWriter {
   bool ply_;
   CurvatureColorParams colors_;
   mutable std::size_t written_ = 0;
+  mutable std::set<std::string> stamps_;  // names written so far
 };
 
 }  // namespace jpcr

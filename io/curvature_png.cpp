@@ -6,6 +6,7 @@
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/curvature_output.hpp"
 #include "jpcr/io/depth_png.hpp"
+#include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
 
@@ -46,6 +47,11 @@ CurvatureWriter::CurvatureWriter(std::string directory, bool ply,
 
 void CurvatureWriter::write(const std::string& stamp, const QuadricMap& map,
                             const VertexMap& vertices) const {
+  // Stamps are timestamps at 1 us (format_stamp): frames closer than that would overwrite
+  // each other's maps.
+  if (!stamps_.insert(stamp).second)
+    throw InputError(directory_ + ": two curvature maps are named " + stamp +
+                     " (their frames' timestamps agree to 1 us, the resolution of the names)");
   write_curvature_npy(directory_ + "/curvature/" + stamp + ".npy", map.curvature);
   save_curvature_png(directory_ + "/curvature_png/" + stamp + ".png", map.curvature, colors_);
   if (ply_) write_curvature_ply(directory_ + "/ply/" + stamp + ".ply", vertices, map, colors_);

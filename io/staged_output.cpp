@@ -51,7 +51,12 @@ StagedOutput::StagedOutput(std::string target, std::vector<std::string> layout)
   remove_abandoned_staging(parent, prefix);
   staging_ = (parent / (prefix + std::to_string(::getpid()))).string();
   fs::remove_all(staging_, ec);
-  ensure_directory(staging_);
+  try {
+    ensure_directory(staging_);
+  } catch (const InputError& e) {  // name the output the user gave, not the staging directory
+    throw InputError(target_ + ": cannot write the output here (staging directory " + e.what() +
+                     ")");
+  }
 }
 
 StagedOutput::~StagedOutput() {
@@ -82,6 +87,14 @@ void StagedOutput::commit() {
   std::error_code ec;
   fs::remove_all(staging_, ec);
   committed_ = true;
+}
+
+void require_output_apart_from(const std::string& target, const std::string& input,
+                               const std::string& option) {
+  std::error_code ec;
+  if (fs::equivalent(target, input, ec))
+    throw InputError(target + ": the output directory is " + option + " " + input +
+                     " itself; writing there would replace its own files (give another --out)");
 }
 
 }  // namespace jpcr

@@ -45,4 +45,10 @@ class StagedOutput {
   bool committed_ = false;
 };
 
+/// Throws InputError when `target` is `input` itself (the same directory after links and ".."):
+/// commit() would replace the input's own entries of the layout's names, e.g. the curvature/
+/// ground truth of a synthetic dataset. `option` names the input in the message ("--dataset").
+void require_output_apart_from(const std::string& target, const std::string& input,
+                               const std::string& option);
+
 }  // namespace jpcr

@@ -42,7 +42,10 @@ void read_associations(const std::string& path, std::vector<ListEntry>& depth,
   for (; std::getline(in, line);) {
     ++number;
     const auto first = line.find_first_not_of(" \t\r");
-    if (first == std::string::npos || line[first] == '#') continue;
+    if (first == std::string::npos || line[first] == '#') {
+      previous_line += "\n";  // keeps the list parser's line numbers those of this file
+      continue;
+    }
     std::istringstream fields(line);
     std::string t_a, f_a, t_b, f_b;
     if (!(fields >> t_a >> f_a >> t_b >> f_b)) {

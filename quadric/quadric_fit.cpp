@@ -197,6 +197,17 @@ class PixelGroupFit {
 
 }  // namespace
 
+NeighbourhoodPattern PatternParams::for_width(int width) const {
+  try {
+    return NeighbourhoodPattern::scaled(radius, stride, width, reference_width);
+  } catch (const std::invalid_argument& e) {
+    throw InputError("pattern (radius " + std::to_string(radius) + ", stride " +
+                     std::to_string(stride) + " at reference_width " +
+                     std::to_string(reference_width) + ") scaled to " + std::to_string(width) +
+                     " px wide: " + e.what());
+  }
+}
+
 void PatternParams::validate() const {
   if (radius < 1 || radius > 64) throw InputError("radius: must be in [1, 64]");
   if (stride < 1 || stride > 64) throw InputError("stride: must be in [1, 64]");

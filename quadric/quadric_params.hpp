@@ -15,9 +15,9 @@ struct PatternParams {
   int stride = 3;             // s, pixels per cell at the reference width
   int reference_width = 640;  // px: the width r and s are given for
 
-  NeighbourhoodPattern for_width(int width) const {
-    return NeighbourhoodPattern::scaled(radius, stride, width, reference_width);
-  }
+  /// The pattern for images `width` px wide. Throws InputError naming the fields when the scaled
+  /// radius or stride leaves [1, 64] (a reference_width far from the images').
+  NeighbourhoodPattern for_width(int width) const;
   void validate() const;  // throws InputError "field: problem"
 };
 

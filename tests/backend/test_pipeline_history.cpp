@@ -57,15 +57,12 @@ std::unique_ptr<Refiner> shifting(const std::string& name, const JointParams&,
       name, name == "j-ftf" ? Eigen::Vector3d(1e-3, 0, 0) : Eigen::Vector3d(0, 2e-3, -1e-3));
 }
 
-// Wraps a refiner and records the depth of every frame it is given.
-class RecordingRefiner : public Refiner {
+// A refiner that hands everything to `inner` but what a subclass changes.
+class WrappingRefiner : public Refiner {
  public:
-  RecordingRefiner(std::unique_ptr<Refiner> inner, std::vector<DepthImage>* seen)
-      : inner_(std::move(inner)), seen_(seen) {}
+  explicit WrappingRefiner(std::unique_ptr<Refiner> inner) : inner_(std::move(inner)) {}
   RefinementResult refine(const std::vector<Frame>& frames,
                           const std::vector<Eigen::Isometry3d>& initial) const override {
-    for (const Frame& f : frames)
-      seen_->push_back(f.depth);
     return inner_->refine(frames, initial);
   }
   RefinementResult refine(const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
@@ -78,20 +75,36 @@ class RecordingRefiner : public Refiner {
 
  private:
   std::unique_ptr<Refiner> inner_;
+};
+
+// Records the depth of every frame it is given.
+class RecordingRefiner : public WrappingRefiner {
+ public:
+  RecordingRefiner(std::unique_ptr<Refiner> inner, std::vector<DepthImage>* seen)
+      : WrappingRefiner(std::move(inner)), seen_(seen) {}
+  RefinementResult refine(const std::vector<Frame>& frames,
+                          const std::vector<Eigen::Isometry3d>& initial) const override {
+    for (const Frame& f : frames)
+      seen_->push_back(f.depth);
+    return WrappingRefiner::refine(frames, initial);
+  }
+  using WrappingRefiner::refine;
+
+ private:
   std::vector<DepthImage>* seen_;
 };
 
 // Fails the calls (counted from 0) listed in `fails`: with a failed verdict and the initial
 // poses, or by throwing as a refiner out of memory or device does.
-class FailingRefiner : public Refiner {
+class FailingRefiner : public WrappingRefiner {
  public:
   enum class How { kVerdict, kThrow };
   FailingRefiner(std::unique_ptr<Refiner> inner, std::vector<int> fails, How how)
-      : inner_(std::move(inner)), fails_(std::move(fails)), how_(how) {}
+      : WrappingRefiner(std::move(inner)), fails_(std::move(fails)), how_(how) {}
   RefinementResult refine(const std::vector<Frame>& frames,
                           const std::vector<Eigen::Isometry3d>& initial) const override {
     if (std::find(fails_.begin(), fails_.end(), calls_++) == fails_.end())
-      return inner_->refine(frames, initial);
+      return WrappingRefiner::refine(frames, initial);
     if (how_ == How::kThrow) throw std::runtime_error("device lost");
     RefinementResult r;
     r.report.method = name();
@@ -99,16 +112,9 @@ class FailingRefiner : public Refiner {
     r.poses = initial;
     return r;
   }
-  RefinementResult refine(const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
-                          const std::vector<Eigen::Isometry3d>& initial,
-                          const QuadricMap& quadrics) const override {
-    return inner_->refine(vertices, camera, initial, quadrics);
-  }
-  std::string name() const override { return inner_->name(); }
-  const JointParams& params() const override { return inner_->params(); }
+  using WrappingRefiner::refine;
 
  private:
-  std::unique_ptr<Refiner> inner_;
   std::vector<int> fails_;
   How how_;
   mutable int calls_ = 0;

@@ -1,8 +1,11 @@
+#include <sys/stat.h>
+
 #include <fstream>
 #include <sstream>
 
 #include <gtest/gtest.h>
 
+#include "input_error.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/quadric/error.hpp"
 #include "temp_dir.hpp"
@@ -36,6 +39,15 @@ TEST(AtomicFile, UnwritableDirectoryIsAnInputErrorNamingThePath) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent_dir_jpcr/x.txt"), std::string::npos);
   }
+}
+
+// A FIFO would block the read forever and /dev/zero never end; both are refused by name.
+TEST(AtomicFile, ReadingSomethingOtherThanARegularFileIsAnInputError) {
+  const test::TempDir dir;
+  const std::string fifo = dir.file("fifo");
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  for (const std::string& path : {fifo, std::string("/dev/zero")})
+    EXPECT_EQ(test::input_error_of([&] { read_file(path); }), path + ": not a regular file");
 }
 
 TEST(AtomicFile, ReadMissingFileNamesIt) {

@@ -187,6 +187,11 @@ TEST(CurvatureMetrics, SupportRadiusKeepsOnlyPixelsAwayFromCreasesAndBorders) {
     }
   }
   EXPECT_THROW(CurvatureErrorAccumulator(-1), InputError);
+  EXPECT_THROW(CurvatureErrorAccumulator(CurvatureErrorAccumulator::kMaxSupportRadius + 1),
+               InputError);
+  CurvatureErrorAccumulator widest(CurvatureErrorAccumulator::kMaxSupportRadius);
+  widest.add(gt, est);  // no window fits: nothing is counted
+  EXPECT_EQ(widest.result().gt_valid, 0u);
   // A window larger than the image leaves nothing to compare (NaN, not 0).
   CurvatureErrorAccumulator huge(7);
   huge.add(gt, est);

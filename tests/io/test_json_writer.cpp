@@ -25,6 +25,19 @@ TEST(JsonWriter, NestedStructureAndEscapes) {
             "\"list\":[1,2.5],\"v\":[1, null],\"empty\":{}}");
 }
 
+// JSON is UTF-8: well-formed sequences pass, any other byte (a Latin-1 path, a cut sequence, an
+// overlong form, a surrogate) becomes U+FFFD.
+TEST(JsonWriter, BytesThatAreNotUtf8BecomeTheReplacementCharacter) {
+  const auto escaped = [](const std::string& s) { return JsonWriter::escape(s); };
+  EXPECT_EQ(escaped("caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x99\x82"),
+            "caf\xc3\xa9 \xe2\x82\xac \xf0\x9f\x99\x82");
+  EXPECT_EQ(escaped("dir\xff/x"), "dir\\ufffd/x");
+  EXPECT_EQ(escaped("caf\xe9"), "caf\\ufffd");                  // Latin-1
+  EXPECT_EQ(escaped("\xe2\x82"), "\\ufffd\\ufffd");             // cut short
+  EXPECT_EQ(escaped("\xc0\xaf"), "\\ufffd\\ufffd");             // overlong '/'
+  EXPECT_EQ(escaped("\xed\xa0\x80"), "\\ufffd\\ufffd\\ufffd");  // a surrogate
+}
+
 TEST(JsonWriter, PythonParsesIndentedOutput) {
   std::ostringstream out;
   JsonWriter json(out);

@@ -97,6 +97,14 @@ TEST(StagedOutput, BadTargetsAreInputErrorsNamingThem) {
   }
   EXPECT_THROW(StagedOutput("", {}), InputError);
   EXPECT_THROW(StagedOutput(file + "/under_a_file", {}), InputError);
+  // A parent where nothing can be created (not even by root): the message names the target.
+  try {
+    StagedOutput out("/proc/jpcr_out", {});
+    FAIL();
+  } catch (const InputError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("/proc/jpcr_out: cannot write the output here", 0), 0u)
+        << e.what();
+  }
 }
 
 // The PID of a child that has exited and been reaped: no process has it (until the kernel

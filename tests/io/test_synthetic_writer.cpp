@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "jpcr/io/camera_yaml.hpp"
+#include "jpcr/io/curvature_output.hpp"
 #include "jpcr/io/depth_png.hpp"
 #include "jpcr/io/npy.hpp"
 #include "jpcr/io/synthetic_writer.hpp"
@@ -114,6 +115,27 @@ TEST(SyntheticWriter, StampsHaveSixDecimals) {
   EXPECT_EQ(format_stamp(0.0), "0.000000");
   EXPECT_EQ(format_stamp(1.0 / 30.0), "0.033333");
   EXPECT_EQ(format_stamp(1305031102.160407), "1305031102.160407");
+}
+
+// Frames whose timestamps agree to 1 us get the same name: the second map is refused instead of
+// overwriting the first.
+TEST(CurvatureWriter, ASecondMapOfTheSameStampIsAnInputError) {
+  test::TempDir dir;
+  const CurvatureWriter writer(dir.path(), false);
+  QuadricMap map(8, 6);
+  const VertexMap vertices(8, 6);
+  const std::string stamp = format_stamp(1e-7);
+  writer.write(stamp, map, vertices);
+  try {
+    writer.write(format_stamp(2e-7), map, vertices);
+    FAIL() << "no error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("two curvature maps are named 0.000000"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(writer.written(), 1u);
+  EXPECT_TRUE(std::filesystem::exists(dir.file("curvature/0.000000.npy")));
 }
 
 }  // namespace

@@ -169,6 +169,17 @@ TEST(TumDataset, AssociationsFileIsUsedWhenPresent) {
   EXPECT_DOUBLE_EQ(dataset.timestamp(1), 11.0);
 }
 
+// Errors give the line of associations.txt itself, comment lines counted.
+TEST(TumDataset, AssociationsErrorsNameTheFilesLine) {
+  test::TempDir dir;
+  make_sequence(dir, 2);
+  dir.write("associations.txt",
+            "# rgb depth\n\n9.99 rgb/a.png 10.0 depth/0.png\n# gap\n11.01 rgb/b.png nan "
+            "depth/1.png\n");
+  const std::string error = error_of([&] { TumDataset(dir.path(), tiny_camera()); });
+  EXPECT_NE(error.find("associations.txt:5:"), std::string::npos) << error;
+}
+
 TEST(DepthPng, SaveLoadRoundTripQuantisesToTheScale) {
   test::TempDir dir;
   DepthImage depth(4, 2, 1.23456f);

@@ -152,6 +152,11 @@ TEST(Params, IcpBundleSection) {
               parse_params("icp_bundle:\n  robust_loss: tukey\n", "c.yaml");
             }).find("icp_bundle.robust_loss"),
             std::string::npos);
+  // Pixel distances beyond any image (normal_offset · width would overflow int).
+  EXPECT_NE(error_of([] {
+              parse_params("icp_bundle:\n  normal_offset: 2000000000\n", "d.yaml");
+            }).find("d.yaml:2: key 'icp_bundle.normal_offset': must be in [1, 16384]"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -34,6 +34,8 @@ expect 0 "frames: 2 compared" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$t
 "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --json --support pattern \
   --out "$tmp/it_interior.json" > /dev/null || { echo "FAIL: eval --support"; fail=1; }
 expect 2 "--support: expected a radius" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --support -3
+# A radius whose window would overflow int (2R + 1 for R = 2^30) is refused, not a crash.
+expect 2 "--support: expected a radius in pixels (0..16384)" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --support 1073741824
 if /usr/bin/python3 -c 'import numpy' 2>/dev/null; then
   /usr/bin/python3 - "$tmp" <<'PY' || fail=1
 import glob, json, sys, numpy as np
@@ -71,6 +73,16 @@ printf 'quadric:\n  fit:\n    iterations: many\n' > "$tmp/bad.yaml"
 expect 1 "iterations" -- "$curv" --dataset "$tmp/seq" --params "$tmp/bad.yaml" --out "$tmp/x"
 expect 2 "--out needs a non-empty value" -- "$curv" --dataset "$tmp/seq" --out ""
 expect 2 "color-scale must be a positive finite" -- "$curv" --dataset "$tmp/seq" --color-scale inf --out "$tmp/x"
+# OUT = the dataset would replace its curvature/ ground truth: refused, the truth kept (the
+# trailing slash and ".." name the same directory).
+cp "$tmp/seq/curvature/0.000000.npy" "$tmp/truth.npy"
+expect 1 "is --dataset .* itself" -- "$curv" --dataset "$tmp/seq" --out "$tmp/seq/"
+expect 1 "is --dataset .* itself" -- "$curv" --dataset "$tmp/seq" --out "$tmp/it/../seq"
+cmp -s "$tmp/truth.npy" "$tmp/seq/curvature/0.000000.npy" || { echo "FAIL: ground truth changed"; fail=1; }
+# A pattern that cannot be scaled to the images fails before the run, naming the file.
+printf 'quadric:\n  pattern:\n    reference_width: 1\n' > "$tmp/tiny_ref.yaml"
+expect 1 "tiny_ref.yaml: quadric: pattern (radius 6, stride 3 at reference_width 1) scaled to 160 px wide" -- \
+  "$curv" --dataset "$tmp/seq" --params "$tmp/tiny_ref.yaml" --out "$tmp/x"
 # Written whole or not at all: a run with a corrupt last frame leaves no map of the good frames
 # and no staging directory; a second run into an earlier OUT leaves none of the earlier maps.
 cp -r "$tmp/seq" "$tmp/seq_bad"

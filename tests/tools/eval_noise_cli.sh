@@ -32,7 +32,8 @@ for part, rms, bias, spread in (("t", d["rms_translation_m"], d["bias_translatio
     assert abs(rms - want) <= 1e-9 * rms, (part, rms, want)
 assert d["predicted_translation_sd_m"] > 0 and d["step_translation_m"] > 0, d
 assert abs(math.sqrt(sum(v * v for v in d["step"][:3])) - d["step_translation_m"]) <= 1e-9 * d["step_translation_m"], d
-assert d["verdict"].startswith("too few draws"), d["verdict"]
+assert d["verdict"].startswith("too few usable draws"), d["verdict"]
+assert d["usable_draws"] == 3 and len(d["draw_verdicts"]) == 3, d
 # The quadric normals' error (J-ftf, Q-full): an angle; ICP-ftf fits no quadrics.
 if d.get("normal_error_rad") is not None:
     assert 0 <= d["normal_error_rad"] <= math.pi and 0 <= d["normal_error_initial_rad"] <= math.pi, d
@@ -92,6 +93,9 @@ expect 2 "noise-matched needs --noise range:K" -- "$eval_bin" noise --noise kine
 expect 2 "motion must be a finite scale" -- "$eval_bin" noise "${small[@]}" --motion nan
 expect 2 "range:K needs a percentage K ≥ 0" -- "$eval_bin" noise --noise range:-1
 expect 1 "bad.yaml" -- "$eval_bin" noise "${small[@]}" --params "$tmp/bad.yaml"
+# Draws whose refinement failed keep their start pose; counting them would report the start's
+# error (zero from the true pose) as the method's. With no usable draw there is no study.
+expect 1 "usable result in 0 of 2 draws" -- "$eval_bin" noise --size 64x48 --noise range:1e300 --draws 2 --device cpu
 expect 1 "no_such_scene" -- "$eval_bin" noise --size 80x60 --scene no_such_scene
 expect 0 "usage: jpcr_eval noise" -- "$eval_bin" noise --help
 exit $fail

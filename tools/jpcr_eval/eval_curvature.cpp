@@ -45,9 +45,10 @@ int support_radius(const std::string& text, int width) {
     r = std::stoi(text, &end);
   } catch (const std::exception&) {
   }
-  if (end != text.size() || r < 0)
-    throw cli::UsageError("--support: expected a radius in pixels (>= 0) or 'pattern', got '" +
-                          text + "'");
+  if (end != text.size() || r < 0 || r > CurvatureErrorAccumulator::kMaxSupportRadius)
+    throw cli::UsageError("--support: expected a radius in pixels (0.." +
+                          std::to_string(CurvatureErrorAccumulator::kMaxSupportRadius) +
+                          ") or 'pattern', got '" + text + "'");
   return r;
 }
 

@@ -38,6 +38,7 @@ namespace {
 struct Draw {
   Vector6d error;       // t − t_true (m), log(R R_trueᵀ) (rad)
   std::string verdict;  // the method's own (RefinementVerdict or IcpVerdict)
+  bool usable = true;   // the verdict says the pose can be used; else left out of the statistics
   int iterations = 0, rejected = 0;
   double predicted_t = 0.0, predicted_r = 0.0;  // report translation_sd, rotation_sd
   // Mean angle (rad) of the reference quadrics' normals from the true normals: Quad IT's (the
@@ -46,7 +47,8 @@ struct Draw {
 };
 
 struct Study {
-  std::vector<Draw> draws;
+  std::vector<Draw> draws;  // all of them; the statistics are over the usable ones
+  std::size_t used = 0;     // usable draws
   Vector6d mean = Vector6d::Zero(), sd = Vector6d::Zero();
   double rms_t = 0.0, rms_r = 0.0;        // RMS of |t error| (m) and of the angle (rad)
   double bias_t = 0.0, bias_r = 0.0;      // |mean v|, |mean ω|
@@ -59,8 +61,11 @@ struct Study {
 Study summarize(std::vector<Draw> draws) {
   Study s;
   s.draws = std::move(draws);
-  const double n = static_cast<double>(s.draws.size());
+  for (const Draw& d : s.draws)
+    s.used += d.usable ? 1 : 0;
+  const double n = static_cast<double>(s.used);
   for (const Draw& d : s.draws) {
+    if (!d.usable) continue;
     s.mean += d.error / n;
     s.predicted_t += d.predicted_t / n;
     s.predicted_r += d.predicted_r / n;
@@ -68,6 +73,7 @@ Study summarize(std::vector<Draw> draws) {
     s.normal_error += d.normal_error / n;
   }
   for (const Draw& d : s.draws) {
+    if (!d.usable) continue;
     const Vector6d c = d.error - s.mean;
     s.sd += c.cwiseProduct(c) / std::max(1.0, n - 1.0);
     s.rms_t += d.error.head<3>().squaredNorm() / n;
@@ -88,7 +94,7 @@ Study summarize(std::vector<Draw> draws) {
     const Eigen::Vector3d u = m.normalized();
     double var = 0.0;
     for (const Draw& d : s.draws)
-      var += std::pow(u.dot(d.error.segment<3>(offset) - m), 2) / (n - 1.0);
+      if (d.usable) var += std::pow(u.dot(d.error.segment<3>(offset) - m), 2) / (n - 1.0);
     return var > 0.0 ? m.norm() / std::sqrt(var / n) : INFINITY;
   };
   s.bias_t_se = in_standard_errors(0);
@@ -116,8 +122,8 @@ Vector6d pose_vector(const Eigen::Isometry3d& T) {
 constexpr std::size_t kMinDrawsToJudge = 8;
 
 std::string verdict_line(const Study& s) {
-  if (s.draws.size() < kMinDrawsToJudge)
-    return "too few draws to judge the bias (use --draws 8 or more)";
+  if (s.used < kMinDrawsToJudge)
+    return "too few usable draws to judge the bias (use --draws 8 or more)";
   const bool significant = s.bias_t_se > 3.0 || s.bias_r_se > 3.0;
   if (!significant) return "no bias measurable: the mean error is within 3 standard errors of zero";
   if (s.bias_t > s.spread_t || s.bias_r > s.spread_r)
@@ -135,6 +141,10 @@ void write_text(std::ostream& out, const Study& s) {
                   d.rejected, d.verdict.c_str());
     out << line;
   }
+  if (s.used < s.draws.size())
+    out << "\n"
+        << s.draws.size() - s.used << " of " << s.draws.size()
+        << " draws failed (verdict above) and are left out of what follows\n";
   out << "\n              t_x      t_y      t_z  (mm)     w_x      w_y      w_z  (mrad)\n";
   auto row = [&](const char* name, const Vector6d& x) {
     std::snprintf(line, sizeof(line), "%-10s %8.3f %8.3f %8.3f      %8.3f %8.3f %8.3f\n", name,
@@ -142,7 +152,7 @@ void write_text(std::ostream& out, const Study& s) {
     out << line;
   };
   row("mean", s.mean);
-  row("std error", s.sd / std::sqrt(static_cast<double>(s.draws.size())));
+  row("std error", s.sd / std::sqrt(static_cast<double>(s.used)));
   row("sd", s.sd);
   std::snprintf(line, sizeof(line),
                 "\nRMS error   t %.3f mm   r %.3f mrad\n"
@@ -167,6 +177,7 @@ void write_json(std::ostream& out, const Study& s, const Eigen::Isometry3d& step
   auto vec = [](const Vector6d& x) { return std::vector<double>(x.data(), x.data() + 6); };
   json.begin_object()
       .field("draws", s.draws.size())
+      .field("usable_draws", s.used)  // the statistics below are over these
       .field("step_translation_m", step.translation().norm())
       .field("step_rotation_rad", rotation_angle(step.linear()))
       .field("step", vec(pose_vector(step)))
@@ -193,6 +204,9 @@ void write_json(std::ostream& out, const Study& s, const Eigen::Isometry3d& step
       json.value(d.error(i));
     json.end_array();
   }
+  json.end_array().key("draw_verdicts").begin_array();
+  for (const Draw& d : s.draws)
+    json.value(d.verdict);
   json.end_array().end_object();
   out << '\n';
 }
@@ -232,6 +246,7 @@ Draw refine_draw(const Refiner& refiner, const QuadricFit& fit,
   d.normal_error = mean_normal_error(r.quadrics, true_normals);
   d.error = pose_error(r.poses[1], truth);
   d.verdict = to_string(r.report.verdict);
+  d.usable = usable(r.report.verdict);
   d.iterations = r.report.iterations;
   d.rejected = r.report.rejected_steps;
   if (!r.report.translation_sd.empty()) {
@@ -251,6 +266,7 @@ Draw icp_draw(const FrontendParams& params, const std::vector<DepthImage>& depth
   Draw d;
   d.error = pose_error(r.pose, truth);
   d.verdict = to_string(r.verdict);
+  d.usable = r.verdict == IcpVerdict::ok;
   d.iterations = r.iterations;
   const PoseSpread spread = pose_spread(r.covariance, r.pose);
   d.predicted_t = spread.translation_m;
@@ -389,6 +405,12 @@ int run_noise(int argc, char** argv) {
                    d.verdict.c_str());
     }
     const Study study = summarize(std::move(results));
+    // A failed draw's pose is its start, so counting it would report the start's error (zero
+    // from the true pose) as the method's.
+    if (study.used < 2)
+      throw InputError(method + " gave a usable result in " + std::to_string(study.used) + " of " +
+                       std::to_string(draws) + " draws (verdict of draw 1: " +
+                       study.draws[0].verdict + "): too few for statistics");
     if (args.get_flag("json"))
       write_json(std::cout, study, truth);
     else

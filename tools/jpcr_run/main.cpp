@@ -107,6 +107,16 @@ int run_main(int argc, char** argv) {
         device_refiner_factory(cli::device_from(args, params), std::cerr);
     // Everything is written into a staging directory and moved into OUT at the end: a run that
     // fails leaves OUT as it was, and a run into an earlier run's OUT replaces all its outputs.
+    require_output_apart_from(args.get("out"), args.get("dataset"), "--dataset");
+    // A pattern that cannot be scaled to these images fails now, naming the file, not at the
+    // first quadric fit.
+    try {
+      pipeline.joint.quadric.pattern.for_width(dataset->camera().width);
+    } catch (const InputError& e) {
+      const bool file = args.has("params") && !args.get("params").empty();
+      throw InputError((file ? args.get("params") : "the built-in parameters") +
+                       ": quadric: " + e.what());
+    }
     StagedOutput out(args.get("out"),
                      {"trajectory.txt", "verdicts.txt", "front_end.txt", "keyframes.txt",
                       "report.json", "curvature", "curvature_png", "ply"});
