@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "cli/arguments.hpp"
+#include "cli/dataset_run_checks.hpp"
 #include "cli/device_option.hpp"
 #include "cli/progress.hpp"
 #include "cli/stop_signal.hpp"
@@ -129,17 +130,8 @@ int run(int argc, char** argv) {
         open_dataset(args.get("dataset"), camera, params.dataset);
     const cli::FrameRange range =
         cli::parse_frame_range(args.has("frames") ? args.get("frames") : "", dataset->size());
+    cli::check_dataset_run(args, *dataset, params.quadric.pattern);
     // Written into a staging directory and moved into OUT at the end (io/staged_output.hpp).
-    require_output_apart_from(args.get("out"), args.get("dataset"), "--dataset");
-    // A pattern that cannot be scaled to these images fails now, naming the file, not at the
-    // first quadric fit.
-    try {
-      params.quadric.pattern.for_width(dataset->camera().width);
-    } catch (const InputError& e) {
-      const bool file = args.has("params") && !args.get("params").empty();
-      throw InputError((file ? args.get("params") : "the built-in parameters") +
-                       ": quadric: " + e.what());
-    }
     StagedOutput out(args.get("out"), {"curvature", "curvature_png", "ply", "summary.json"});
     const CurvatureWriter writer(out.directory(), args.get_flag("ply"), colors);
     std::cerr << "jpcr_curvature: " << dataset->description() << ", " << estimator->name()

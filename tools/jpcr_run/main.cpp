@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "cli/arguments.hpp"
+#include "cli/dataset_run_checks.hpp"
 #include "cli/device_option.hpp"
 #include "cli/pipeline_options.hpp"
 #include "cli/progress.hpp"
@@ -105,18 +106,9 @@ int run_main(int argc, char** argv) {
     const KeyframePipeline* self = nullptr;
     const RefinerFactory refiners =
         device_refiner_factory(cli::device_from(args, params), std::cerr);
+    cli::check_dataset_run(args, *dataset, pipeline.joint.quadric.pattern);
     // Everything is written into a staging directory and moved into OUT at the end: a run that
     // fails leaves OUT as it was, and a run into an earlier run's OUT replaces all its outputs.
-    require_output_apart_from(args.get("out"), args.get("dataset"), "--dataset");
-    // A pattern that cannot be scaled to these images fails now, naming the file, not at the
-    // first quadric fit.
-    try {
-      pipeline.joint.quadric.pattern.for_width(dataset->camera().width);
-    } catch (const InputError& e) {
-      const bool file = args.has("params") && !args.get("params").empty();
-      throw InputError((file ? args.get("params") : "the built-in parameters") +
-                       ": quadric: " + e.what());
-    }
     StagedOutput out(args.get("out"),
                      {"trajectory.txt", "verdicts.txt", "front_end.txt", "keyframes.txt",
                       "report.json", "curvature", "curvature_png", "ply"});
@@ -151,7 +143,7 @@ int run_main(int argc, char** argv) {
 #ifdef JPCR_HAVE_DDS
       if (dds) dds->frame_added(runner, f);
 #endif
-      const PipelineKeyframe& k = runner.keyframes().back();
+      const PipelineKeyframe& k = runner.keyframes().back();  // the first frame is one
       for (const std::optional<RefinementReport>* r : {&k.pair, &k.window})
         if (k.frame == f.index && *r && (*r)->verdict == RefinementVerdict::kError)
           progress.note("frame " + std::to_string(i) + ": " + (*r)->method + " failed (" +

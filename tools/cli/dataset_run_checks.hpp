@@ -1,0 +1,17 @@
+// Checks of a dataset run's inputs, made before the run starts (jpcr_run, jpcr_curvature), so
+// that a mistake costs no run and names what to change.
+#pragma once
+
+#include "cli/arguments.hpp"
+#include "jpcr/io/frame_source.hpp"
+#include "jpcr/quadric/quadric_params.hpp"
+
+namespace jpcr::cli {
+
+/// Throws InputError when --out is the --dataset directory itself (writing there would replace
+/// the dataset's own curvature/ ground truth), or when `pattern` cannot be scaled to the
+/// dataset's width (named with the --params file, or "the built-in parameters").
+void check_dataset_run(const Arguments& args, const FrameSource& dataset,
+                       const PatternParams& pattern);
+
+}  // namespace jpcr::cli
