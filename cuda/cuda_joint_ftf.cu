@@ -275,15 +275,16 @@ CudaJointSystem::~CudaJointSystem() = default;
 
 namespace {
 
-// Throws std::invalid_argument unless two frames of one size, two poses and one quadric and one
-// validity flag per pixel: checked before load() touches anything, so a rejected pair leaves the
-// loaded one as it was.
+// Throws std::invalid_argument unless two frames of one size (width and height: the kernels read
+// frame 2 with frame 1's), two poses and one quadric and one validity flag per pixel: checked
+// before load() touches anything, so a rejected pair leaves the loaded one as it was.
 void check_pair(const std::vector<VertexMap>& frames, std::size_t poses, std::size_t quadrics,
                 std::size_t valid) {
   if (frames.size() != 2 || poses != 2)
     throw std::invalid_argument("CudaJointSystem: J-ftf needs exactly two frames and two poses");
   const std::size_t pixels = frames[0].size();
-  if (frames[1].size() != pixels || quadrics != pixels || valid != pixels)
+  if (frames[1].width() != frames[0].width() || frames[1].height() != frames[0].height() ||
+      quadrics != pixels || valid != pixels)
     throw std::invalid_argument("CudaJointSystem: frames and state differ in size");
 }
 
@@ -304,8 +305,25 @@ void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraInt
   upload(frames, camera, pattern);
 }
 
+// A device error part way (out of memory, a lost device) leaves nothing loaded rather than a
+// pair whose sizes the buffers do not have.
 void CudaJointSystem::upload(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
                              const NeighbourhoodPattern& pattern) {
+  try {
+    copy_to_device(frames, camera, pattern);
+  } catch (...) {
+    Device& d = *device_;
+    d.width = d.height = 0;
+    d.pattern_size = 0;
+    state_ = JointState{};
+    candidate_poses_.clear();
+    throw;
+  }
+}
+
+void CudaJointSystem::copy_to_device(const std::vector<VertexMap>& frames,
+                                     const CameraIntrinsics& camera,
+                                     const NeighbourhoodPattern& pattern) {
   const std::size_t pixels = frames[0].size();
   Device& d = *device_;
   d.width = frames[0].width();
@@ -396,6 +414,8 @@ double CudaJointSystem::propose(const ReducedSystem& /*system*/, double /*lambda
                                 const std::vector<Vector6d>& pose_steps) {
   if (pose_steps.size() != 1)
     throw std::invalid_argument("CudaJointSystem: J-ftf has exactly one pose step");
+  if (state_.poses.size() != 2)
+    throw std::logic_error("CudaJointSystem: propose() before a pair was loaded");
   // T ← exp(Δξ^) T, re-orthonormalised, as JointSystem::step; the factors are those of the last
   // linearize (the loop of joint_problem.hpp always proposes from the latest linearisation).
   Eigen::Isometry3d T = se3_exp(pose_steps[0]) * state_.poses[1];

@@ -82,6 +82,8 @@ class CudaJointSystem final : public JointProblem {
   void launch_step(const Vector6d& pose_step);
   void upload(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
               const NeighbourhoodPattern& pattern);  // the frames, pattern and state_ (checked)
+  void copy_to_device(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
+                      const NeighbourhoodPattern& pattern);  // upload's work
 
   JointTermParams params_;
   CudaPrecision precision_;

@@ -67,7 +67,7 @@ struct DdsDepthSubscriber::State {
         r.image.encoding = std::string(view.encoding);
         r.image.step = view.step;
         r.image.data.assign(view.data, view.data + view.size);
-      } catch (const InputError& e) {
+      } catch (const std::exception& e) {  // also bad_alloc: nothing may leave Cyclone's thread
         r.problem = e.what();
       }
       const std::lock_guard<std::mutex> lock(s.mutex);
@@ -86,11 +86,14 @@ struct DdsDepthSubscriber::State {
       ReceivedCamera r;
       try {
         r.camera = decode_camera_info(camera_info_of(m), s.limits);
-      } catch (const InputError& e) {
+      } catch (const std::exception& e) {
         r.problem = e.what();
       }
       const std::lock_guard<std::mutex> lock(s.mutex);
       s.cameras.push_back(std::move(r));
+      // Only the newest camera counts: while the caller is busy the queue keeps the last few
+      // (an older sample dropped here is not logged).
+      if (s.cameras.size() > kCameraQueue) s.cameras.pop_front();
       s.arrived.notify_all();
     });
   }
@@ -101,6 +104,7 @@ struct DdsDepthSubscriber::State {
   std::condition_variable arrived;
   std::deque<ReceivedImage> images;
   std::deque<ReceivedCamera> cameras;
+  static constexpr std::size_t kCameraQueue = 8;
   std::size_t dropped = 0;
   // The caller's thread only.
   std::optional<CameraIntrinsics> camera;
@@ -145,6 +149,13 @@ void DdsDepthSubscriber::process() {
   for (const ReceivedCamera& c : cameras) {
     if (c.camera) {
       s.camera = c.camera;
+      if (c.camera->has_distortion() && !distortion_logged_) {
+        distortion_logged_ = true;
+        *log_ << "jpcr dds: " << config_.camera_info_topic
+              << ": the camera has lens distortion, which is not applied: the depth is used as"
+                 " received and must be rectified (an image_rect topic)"
+              << std::endl;
+      }
     } else {
       reject(config_.camera_info_topic, c.problem);
     }

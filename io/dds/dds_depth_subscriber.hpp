@@ -7,6 +7,10 @@
 // queue of at most image_history_depth images, the KEEP_LAST depth of the input QoS: when the
 // caller is slower than the camera, the oldest waiting image is dropped, counted
 // (frames_dropped()) and logged, never lost silently in the reader's history.
+//
+// The depth is used as received: it must be rectified (a driver's image_rect topic; what
+// jpcr_dds_play publishes is). A camera_info with lens distortion D is logged once, as D is
+// not applied.
 #pragma once
 
 #include <chrono>
@@ -56,6 +60,7 @@ class DdsDepthSubscriber {
   std::size_t frames_ = 0;
   std::size_t rejected_ = 0;
   std::size_t dropped_logged_ = 0;
+  bool distortion_logged_ = false;  // the note that D is not applied, once
   std::uint32_t lost_ = 0;
 };
 

@@ -167,8 +167,13 @@ CameraIntrinsics decode_camera_info(const RosCameraInfo& info, const RosImageLim
     reject("camera_info focal lengths fx = " + std::to_string(k[0]) +
            ", fy = " + std::to_string(k[4]) + " must be positive");
   }
-  if (k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0) {
-    reject("camera_info K is not a pinhole matrix [fx s cx; 0 fy cy; 0 0 1]");
+  if (k[1] != 0.0 || k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0) {
+    reject("camera_info K is not a pinhole matrix without skew [fx 0 cx; 0 fy cy; 0 0 1]");
+  }
+  if (!(k[2] >= 0.0 && k[2] < info.width && k[5] >= 0.0 && k[5] < info.height)) {
+    reject("camera_info principal point (" + std::to_string(k[2]) + ", " + std::to_string(k[5]) +
+           ") lies outside the " + std::to_string(info.width) + "x" + std::to_string(info.height) +
+           " image");
   }
   if (info.binning_x > 1 || info.binning_y > 1) reject("camera_info binning is not supported");
   CameraIntrinsics camera;

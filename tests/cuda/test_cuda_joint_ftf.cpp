@@ -274,11 +274,22 @@ TEST(CudaJointFrameToFrame, ARejectedLoadKeepsTheLoadedPair) {
                std::invalid_argument);
   EXPECT_THROW(gpu.load(pair.vertices, pair.camera, pattern, poses, QuadricMap(80, 60)),
                std::invalid_argument);
+  // Frames of as many pixels but another shape (the kernels would read frame 2 wrongly).
+  const VertexMap transposed(pair.vertices[1].height(), pair.vertices[1].width());
+  EXPECT_THROW(gpu.load({pair.vertices[0], transposed}, pair.camera, pattern, poses, initial),
+               std::invalid_argument);
   const ReducedSystem after = gpu.linearize(params.initial_damping);
   EXPECT_EQ(after.active, before.active);
   EXPECT_EQ(after.cost, before.cost);
   EXPECT_TRUE(after.S == before.S);
   EXPECT_TRUE(gpu.state().poses[1].isApprox(pair.start, 0.0));
+}
+
+// Nothing loaded yet: a step is a logic error, not a read past the poses.
+TEST(CudaJointFrameToFrame, ProposeBeforeLoadIsALogicError) {
+  SKIP_WITHOUT_GPU();
+  CudaJointSystem gpu(JointParams{}.terms(true));
+  EXPECT_THROW(gpu.propose(ReducedSystem{}, 0.0, {Vector6d::Zero()}), std::logic_error);
 }
 
 TEST(CudaJointFrameToFrame, AnEmptyPairHasTooFewQuadricsAsOnTheCpu) {

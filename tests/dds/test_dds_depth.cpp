@@ -74,7 +74,10 @@ TEST_F(DdsDepth, FrameArrivesIdenticalIn16UC1And32FC1) {
   }
   EXPECT_EQ(subscriber.frames_received(), 2u);
   EXPECT_EQ(subscriber.samples_rejected(), 0u);
-  EXPECT_EQ(log.str(), "");
+  // The camera has lens distortion: one line, once, says that it is not applied.
+  EXPECT_EQ(log.str(), "jpcr dds: " + config_.camera_info_topic +
+                           ": the camera has lens distortion, which is not applied: the depth is "
+                           "used as received and must be rectified (an image_rect topic)\n");
 }
 
 TEST_F(DdsDepth, WaitFrameTimesOutWithoutPublisher) {

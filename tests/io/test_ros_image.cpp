@@ -188,7 +188,15 @@ TEST(RosCameraInfo, MalformedCameraInfoIsRejected) {
             "camera_info focal lengths fx = 300.000000, fy = -5.000000 must be positive");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.k[2] = std::nan(""); }), "camera_info K is not finite");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.k[8] = 0.0; }),
-            "camera_info K is not a pinhole matrix [fx s cx; 0 fy cy; 0 0 1]");
+            "camera_info K is not a pinhole matrix without skew [fx 0 cx; 0 fy cy; 0 0 1]");
+  // Skew would be dropped, and a principal point off the image is no real camera's.
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.k[1] = 0.5; }),
+            "camera_info K is not a pinhole matrix without skew [fx 0 cx; 0 fy cy; 0 0 1]");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.k[2] = 1e6; }),
+            "camera_info principal point (1000000.000000, 29.500000) lies outside the 80x60 "
+            "image");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.k[5] = -500; }),
+            "camera_info principal point (39.500000, -500.000000) lies outside the 80x60 image");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.width = 0; }), "camera_info has zero size 0x60");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.binning_x = 2; }),
             "camera_info binning is not supported");

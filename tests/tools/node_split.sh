@@ -103,6 +103,30 @@ sleep 1.5; kill -TERM $back_pid; wait_bounded $back_pid 20; rc=$?
 grep -q "stopped by signal" "$tmp/back3.txt" && [ $rc = 0 ] ||
   { echo "FAIL: back end SIGTERM: exit $rc"; cat "$tmp/back3.txt"; fail=1; }
 
+# A back end started after the front end sent its first keyframes cannot chain the later ones:
+# it names the lost keyframes, publishes what it has and exits 1 (it used to skip every later
+# message, the end of stream included, and never stop).
+"$node" --role frontend "${dds[@]}" "${method[@]}" --backend-wait 0 --max-frames $frames \
+  --idle-timeout 60 > "$tmp/front4.txt" 2>&1 &
+front_pid=$!; pids+=($front_pid)
+sleep 1
+expect 0 "published 4 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 --frames 0:4 \
+  --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
+for _ in $(seq 600); do grep -q "jpcr_node: frame 4 " "$tmp/front4.txt" && break; sleep 0.1; done
+"$node" --role backend "${dds[@]}" "${method[@]}" --idle-timeout 60 > "$tmp/back4.txt" 2>&1 &
+back_pid=$!; pids+=($back_pid)
+sleep 1.5
+expect 0 "published 4 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 --frames 4:8 \
+  --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
+wait_bounded $front_pid 60
+wait_bounded $back_pid 60; rc=$?
+if [ $rc = 1 ] && grep -q "error: keyframe message for frames .* keyframes were lost" "$tmp/back4.txt" &&
+    grep -q "stopped by a lost keyframe" "$tmp/back4.txt"; then
+  echo "ok: a back end that missed keyframes stops: $(grep error "$tmp/back4.txt")"
+else
+  echo "FAIL: late back end: exit $rc"; cat "$tmp/front4.txt" "$tmp/back4.txt"; fail=1
+fi
+
 expect 2 "--role must be all, frontend or backend, got 'middle'" -- "$node" --role middle
 expect 2 "--backend-wait must be >= 0" -- "$node" --role frontend --backend-wait -1
 exit ${fail:-0}

@@ -133,15 +133,21 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
   node::StopRules stop = o.stop;
   stop.max_items = 0;  // --max-frames belongs to the front end; its end of stream stops us
   node::Progress progress;
-  const node::Outcome outcome = node::receive(
+  // Each keyframe message continues the chain of the ones before it. Once one is lost (never
+  // received, or refused: another camera), no later one can be chained to what was refined, so
+  // the back end stops there, publishes what it has and exits 1.
+  std::string lost;
+  node::Outcome outcome = node::receive(
       stop, [&](auto slice) { return reader.wait(slice); },
       [&](const DecodedKeyframe& k) {
         const std::size_t first = static_cast<std::size_t>(k.frame_index) - k.tracked.size();
-        if (first != back_end->frame_count())
-          throw InputError("keyframe message for frames " + std::to_string(first) + ".." +
-                           std::to_string(k.frame_index) + " after frame " +
-                           std::to_string(back_end->frame_count()) +
-                           ": keyframes were lost (start the back end before the front end)");
+        if (first != back_end->frame_count()) {
+          lost = "keyframe message for frames " + std::to_string(first) + ".." +
+                 std::to_string(k.frame_index) + " after frame " +
+                 std::to_string(back_end->frame_count()) +
+                 ": keyframes were lost (start the back end before the front end)";
+          return node::Step::kEndOfStream;
+        }
         for (std::size_t i = 0; i < k.tracked.size(); ++i) {
           PipelineFrame f;
           f.index = static_cast<int>(first + i);
@@ -153,11 +159,17 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
         f.index = k.frame_index;
         f.front_end = k.pose;
         f.icp_covariance = k.covariance;
-        back_end->add(f, &k.frame);
+        try {
+          back_end->add(f, &k.frame);
+        } catch (const InputError& e) {
+          lost = "keyframe of frame " + std::to_string(k.frame_index) + " refused: " + e.what();
+          return node::Step::kEndOfStream;
+        }
         publisher.path_if_refined(*back_end);
         progress.keyframe(back_end->keyframe_count(), back_end->frame_count());
         return node::Step::kProcessed;
       });
+  if (!lost.empty()) outcome.reason = "a lost keyframe";
   progress.done();
   if (back_end->frame_count() > 0) {
     back_end->finish();
@@ -169,7 +181,9 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
             << back_end->frame_count() << " frames, " << publisher.keyframes_published()
             << " curvature maps; rejected " << reader.samples_rejected() << " samples, skipped "
             << outcome.skipped << " messages; stopped by " << outcome.reason << '\n';
-  return 0;
+  if (lost.empty()) return 0;
+  std::cerr << "jpcr_node: error: " << lost << "; the back end stopped there\n";
+  return 1;
 }
 
 int node_main(int argc, char** argv) {
