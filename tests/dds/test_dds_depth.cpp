@@ -139,9 +139,11 @@ TEST_F(DdsDepth, MalformedSamplesAreRejectedAndReceptionGoesOn) {
   EXPECT_EQ(subscriber.samples_rejected(), 7u) << log.str();
   EXPECT_EQ(subscriber.frames_received(), 1u);
   const std::string text = log.str();
-  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 7) << text;
+  // One line per rejected sample, and one (once) that the camera's lens distortion is not applied.
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 8) << text;
   for (const char* expected :
-       {"image_raw: rejected sample: data is 153598 bytes, step x height = 153600",
+       {"camera_info: the camera has lens distortion, which is not applied",
+        "image_raw: rejected sample: data is 153598 bytes, step x height = 153600",
         "image_raw: rejected sample: unknown encoding 'yuv422'", "zero size 0x0",
         "claimed size step x height = 100000000 bytes exceeds the limit of 67108864",
         "big-endian data is not supported", "step 10 < width x 2 bytes = 640",

@@ -174,8 +174,7 @@ TEST_F(DdsResults, KeyframeMessageRoundTrips) {
   ASSERT_TRUE(writer.wait_matched(1, kTimeout));
   Frame frame;
   frame.timestamp = 7.5;
-  frame.camera.width = 32;
-  frame.camera.height = 24;
+  frame.camera = CameraIntrinsics{}.resized(32, 24);  // a real camera: principal point inside
   frame.depth = DepthImage(32, 24, 1.25f);
   frame.depth(3, 4) = 0.0f;
   Matrix6d cov = Matrix6d::Identity() * 1e-3;
@@ -218,8 +217,7 @@ TEST_F(DdsResults, KeyframeLinkDeliversInOrderAndRejectsMalformedKeyframes) {
   const DdsKeyframeWriter writer(publisher_side_, config_);
   ASSERT_TRUE(writer.wait_matched(kTimeout));
   Frame frame;
-  frame.camera.width = 16;
-  frame.camera.height = 12;
+  frame.camera = CameraIntrinsics{}.resized(16, 12);
   frame.depth = DepthImage(16, 12, 2.0f);
   for (int i = 0; i < 3; ++i) {
     frame.timestamp = 1.0 + i;
