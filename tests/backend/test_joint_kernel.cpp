@@ -35,7 +35,7 @@ void for_each_frame_two_sample(const JointTestWindow& w, const QuadricMap& map,
   for (int v = 20; v < w.camera.height; v += 37) {
     for (int u = 20; u < w.camera.width; u += 41) {
       if (!map.valid(u, v)) continue;
-      Quadricd q = map.quadrics(u, v).cast<double>();
+      Quadricd q = map.quadrics(u, v).template cast<double>();
       adjust(q);
       int su = 0, sv = 0;
       if (!associate(q.center, motion(T), view2, cam, params, su, sv)) continue;

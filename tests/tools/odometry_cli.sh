@@ -68,6 +68,9 @@ expect 1 "bad_params.yaml:3: key 'frontend.icp.max_distance': must be positive" 
 expect 1 "unknown key 'frontend.tracker.keyframe_distance'" -- \
   "$odo" --dataset "$fr1" --config "$cam" --params "$tmp/typo_params.yaml" --out "$tmp/x.txt"
 expect 1 "no camera given" -- "$odo" --dataset "$fr1" --out "$tmp/x.txt"
+# An output under a file can never be written: refused before the run (no dataset is read).
+printf 'x' > "$tmp/afile"
+expect 1 "afile/x.txt: .*afile is not a directory" -- "$odo" --dataset "$tmp/nosuch" --out "$tmp/afile/x.txt"
 expect 2 "out is required" -- "$odo" --dataset "$fr1"
 expect 2 "mode: unknown tracking mode 'sideways'" -- "$odo" --dataset "$fr1" --mode sideways --out "$tmp/x.txt"
 expect 2 "frames must be >= 0" -- "$odo" --dataset "$fr1" --frames -1 --out "$tmp/x.txt"

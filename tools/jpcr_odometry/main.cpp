@@ -133,9 +133,19 @@ int run(int argc, char** argv) {
     // Before the run, so it fails early.
     if (std::filesystem::weakly_canonical(out) == std::filesystem::weakly_canonical(summary))
       throw cli::UsageError("--summary and --out name the same file: " + out);
-    for (const std::string& file : {out, summary})
+    for (const std::string& file : {out, summary}) {
       if (std::filesystem::is_directory(file))
         throw InputError(file + ": is a directory, not a file to write");
+      // The nearest existing parent must be a directory, or no run could write there.
+      for (std::filesystem::path p = std::filesystem::path(file).parent_path(); !p.empty();
+           p = p.parent_path()) {
+        std::error_code ec;
+        if (!std::filesystem::exists(p, ec)) continue;
+        if (!std::filesystem::is_directory(p, ec))
+          throw InputError(file + ": " + p.string() + " is not a directory");
+        break;
+      }
+    }
     std::optional<CameraIntrinsics> camera;
     if (args.has("config")) camera = load_camera_yaml(args.get("config"));
     const std::string dataset = args.get("dataset");
