@@ -22,7 +22,9 @@ struct CameraIntrinsics {
 
   bool has_distortion() const;
 
-  /// Throws std::invalid_argument naming the first bad field (non-positive focal length, ...).
+  /// Throws std::invalid_argument naming the first bad field: a focal length that is not
+  /// positive or gives a field of view outside 0.1°–175°, a principal point more than one image
+  /// side off the image, a depth scale outside 1e-3–1e7 units per metre, a non-finite value.
   void validate() const;
 
   /// Intrinsics of the image downsampled by 2^level (pixel centres kept consistent).

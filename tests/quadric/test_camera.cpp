@@ -44,6 +44,40 @@ TEST(Camera, ValidateNamesTheBadField) {
   EXPECT_NO_THROW(CameraIntrinsics().validate());
 }
 
+TEST(Camera, ValidateRefusesAbsurdButFiniteValues) {
+  const auto refused_field = [](const CameraIntrinsics& c) -> std::string {
+    try {
+      c.validate();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what()).substr(0, std::string(e.what()).find(':'));
+    }
+    return "";
+  };
+  CameraIntrinsics c;
+  c.fx = 1e-300;  // a field of view of 180° to double precision
+  EXPECT_EQ(refused_field(c), "fx");
+  c = CameraIntrinsics();
+  c.fy = 1e300;  // 0°
+  EXPECT_EQ(refused_field(c), "fy");
+  // The bounds are the field of view's: 175° at 640 px is fx = 320 / tan(87.5°) = 13.97 px.
+  c = CameraIntrinsics();
+  c.fx = 14.0;
+  EXPECT_EQ(refused_field(c), "");
+  c.fx = 13.9;
+  EXPECT_EQ(refused_field(c), "fx");
+  c = CameraIntrinsics();
+  c.cx = 1e12;
+  EXPECT_EQ(refused_field(c), "cx");
+  c = CameraIntrinsics();
+  c.cy = -481.0;
+  EXPECT_EQ(refused_field(c), "cy");
+  c = CameraIntrinsics();
+  c.depth_scale = 1e-300;
+  EXPECT_EQ(refused_field(c), "depth_scale");
+  c.depth_scale = 1.0;  // float depth in metres
+  EXPECT_EQ(refused_field(c), "");
+}
+
 TEST(Camera, DistortionFlag) {
   CameraIntrinsics c;
   EXPECT_FALSE(c.has_distortion());
