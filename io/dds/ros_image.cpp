@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <stdexcept>
 #include <string>
 
 #include "jpcr/quadric/error.hpp"
@@ -196,6 +197,11 @@ CameraIntrinsics decode_camera_info(const RosCameraInfo& info, const RosImageLim
     }
   }
   if (model.empty() && camera.has_distortion()) reject("camera_info D without a distortion model");
+  try {
+    camera.validate();  // e.g. a focal length giving a field of view of 180°
+  } catch (const std::invalid_argument& e) {
+    reject(std::string("camera_info ") + e.what());
+  }
   return camera;
 }
 

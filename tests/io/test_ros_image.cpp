@@ -197,6 +197,9 @@ TEST(RosCameraInfo, MalformedCameraInfoIsRejected) {
             "image");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.k[5] = -500; }),
             "camera_info principal point (39.500000, -500.000000) lies outside the 80x60 image");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.k[0] = 1e-300; }),
+            "camera_info fx: must be a positive number of pixels giving a horizontal field of view "
+            "of 0.1° to 175°");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.width = 0; }), "camera_info has zero size 0x60");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.binning_x = 2; }),
             "camera_info binning is not supported");
