@@ -1,6 +1,7 @@
 #include "jpcr/io/dds/ros_messages.hpp"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 #include "jpcr/quadric/error.hpp"
@@ -209,8 +210,26 @@ RosCameraInfo camera_info_of(const RosCameraInfoMsg& message) {
   return info;
 }
 
+namespace {
+
+// The front end's ICP covariance as a keyframe carries it: finite, symmetric, with a
+// non-negative diagonal (it is republished on odom as received).
+void check_keyframe_covariance(const Matrix6d& c) {
+  if (!c.allFinite()) throw InputError("keyframe covariance is not finite");
+  const double scale = c.cwiseAbs().maxCoeff();
+  if ((c - c.transpose()).cwiseAbs().maxCoeff() > 1e-9 * scale)
+    throw InputError("keyframe covariance is not symmetric");
+  if ((c.diagonal().array() < 0.0).any())
+    throw InputError("keyframe covariance has a negative variance");
+}
+
+}  // namespace
+
 DecodedKeyframe decode_keyframe(const RosKeyframe& message, const RosImageLimits& limits) {
   DecodedKeyframe k;
+  if (message.frame_index > static_cast<std::uint32_t>(std::numeric_limits<int>::max()))
+    throw InputError("keyframe frame_index " + std::to_string(message.frame_index) +
+                     " is out of range");
   k.frame_index = static_cast<int>(message.frame_index);
   if (message.tracked._length > message.frame_index)
     throw InputError("keyframe " + std::to_string(message.frame_index) + " carries " +
@@ -224,6 +243,7 @@ DecodedKeyframe decode_keyframe(const RosKeyframe& message, const RosImageLimits
                                limits);
   k.pose = StampedPose{k.frame.timestamp, pose_of(message.pose.pose)};
   k.covariance = covariance_of(message.pose.covariance);
+  check_keyframe_covariance(k.covariance);
   return k;
 }
 

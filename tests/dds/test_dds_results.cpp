@@ -15,6 +15,7 @@
 #include "jpcr/io/dds/dds_keyframe_link.hpp"
 #include "jpcr/io/dds/dds_result_publisher.hpp"
 #include "jpcr/io/dds/ros_messages.hpp"
+#include "jpcr/quadric/error.hpp"
 #include "jpcr/quadric/se3.hpp"
 
 namespace jpcr {
@@ -178,7 +179,7 @@ TEST_F(DdsResults, KeyframeMessageRoundTrips) {
   frame.depth = DepthImage(32, 24, 1.25f);
   frame.depth(3, 4) = 0.0f;
   Matrix6d cov = Matrix6d::Identity() * 1e-3;
-  cov(0, 5) = 2e-5;
+  cov(0, 5) = cov(5, 0) = 2e-5;  // a covariance is symmetric
   const Trajectory tracked = {some_pose(6.5), some_pose(7.0)};
   const KeyframeMessage message(frame, some_pose(7.5), cov, DepthEncoding::kMetres32, "map", "cam",
                                 9, tracked);
@@ -207,6 +208,40 @@ TEST_F(DdsResults, KeyframeMessageRoundTrips) {
   EXPECT_EQ(last->frame_index, 12);
   ASSERT_EQ(last->tracked.size(), 1u);
   EXPECT_EQ(last->tracked[0].timestamp, 8.0);
+}
+
+// A keyframe whose covariance or frame index could not have come from a front end is refused,
+// naming the problem (decode only: no transport involved).
+TEST(KeyframeDecode, ImpossibleCovarianceOrIndexIsRefused) {
+  Frame frame;
+  frame.timestamp = 3.0;
+  frame.camera = CameraIntrinsics{}.resized(16, 12);
+  frame.depth = DepthImage(16, 12, 2.0f);
+  Matrix6d cov = Matrix6d::Identity() * 1e-4;
+  cov(1, 2) = cov(2, 1) = 3e-6;
+  const auto refusal = [&](const Matrix6d& c, std::uint32_t index = 4) -> std::string {
+    const KeyframeMessage message(frame, some_pose(3.0), c, DepthEncoding::kMetres32, "map", "cam");
+    RosKeyframe m = message.message();
+    m.frame_index = index;
+    try {
+      decode_keyframe(m, {});
+    } catch (const InputError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_EQ(refusal(cov), "");
+  EXPECT_EQ(refusal(Matrix6d::Zero()), "");  // the first frame's
+  Matrix6d bad = cov;
+  bad(0, 0) = std::nan("");
+  EXPECT_EQ(refusal(bad), "keyframe covariance is not finite");
+  bad = cov;
+  bad(1, 2) = 4e-6;
+  EXPECT_EQ(refusal(bad), "keyframe covariance is not symmetric");
+  bad = cov;
+  bad(5, 5) = -1e-4;
+  EXPECT_EQ(refusal(bad), "keyframe covariance has a negative variance");
+  EXPECT_EQ(refusal(cov, 3000000000u), "keyframe frame_index 3000000000 is out of range");
 }
 
 // The split deployment's link: keyframes arrive in order over the keep-all topic, a malformed
