@@ -43,7 +43,9 @@ void describe(const NormalEquations& eq, IcpResult& r) {
   }
   const double lmax = std::max(r.eigenvalues[5], 1e-300);
   const Vector6d inv = r.eigenvalues.cwiseMax(1e-12 * lmax).cwiseInverse();
-  const double dof = std::max(eq.sum_weights - 6.0, 1.0);
+  // σ² of a unit-weight residual: Σ w e² over the residuals' degrees of freedom. Not Σ w − 6:
+  // the z⁻ᵏ depth weights have no unit scale (Σ w is 1/16 of the count at 2 m for k = 4).
+  const double dof = std::max(static_cast<double>(eq.inliers) - 6.0, 1.0);
   r.covariance =
       (eq.cost / dof) * eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
 }

@@ -40,7 +40,8 @@ struct IcpResult {
   /// λmin / λmax of JᵀWJ made unit-free: the ω columns are divided by the RMS lever arm
   /// √(Σ w |p × n|² / Σ w). 1 is perfectly conditioned, 0 unobservable.
   double degeneracy = 0.0;
-  /// σ² (JᵀWJ)⁻¹ for ξ in the target frame (left perturbation), σ² = Σ w e² / (Σ w − 6).
+  /// σ² (JᵀWJ)⁻¹ for ξ in the target frame (left perturbation), σ² = Σ w e² / (n − 6) over the n
+  /// final pairs: the variance of a unit-weight residual.
   /// Eigenvalues below 1e-12 λmax are clamped, so unobserved directions read as huge, not Inf.
   Matrix6d covariance = Matrix6d::Identity();
   IcpVerdict verdict = IcpVerdict::too_few_points;
