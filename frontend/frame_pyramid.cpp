@@ -76,7 +76,8 @@ DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& p, 
             const float zi = row[u + du];
             const float d = std::abs(zi - z);
             if (zi <= 0.0f || d >= cutoff) continue;
-            const float wi = ws[du] * range[static_cast<int>(d * to_bin)];
+            // d < cutoff, yet d · to_bin can round up to kTable in float.
+            const float wi = ws[du] * range[std::min(static_cast<int>(d * to_bin), kTable - 1)];
             sum += wi * zi;
             weight += wi;
           }

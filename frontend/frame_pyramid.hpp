@@ -3,6 +3,8 @@
 // (method.md §1: normals point toward the camera).
 #pragma once
 
+#include <algorithm>
+
 #include <vector>
 
 #include "jpcr/frontend/frontend_params.hpp"
@@ -29,12 +31,14 @@ struct FramePyramid {
 };
 
 /// The normal map that serves `level`: its own, or when it has none the next coarser level's,
-/// read at (u >> shift, v >> shift).
+/// read at (u >> shift, v >> shift). The coarser level has ⌊w/2⌋ x ⌊h/2⌋ pixels, so the last
+/// column or row of an odd-sized level reads the coarse map's last one.
 struct NormalLookup {
   const NormalMap* normals = nullptr;
   int shift = 0;
   const Eigen::Vector3f& operator()(int u, int v) const {
-    return (*normals)(u >> shift, v >> shift);
+    return (*normals)(std::min(u >> shift, normals->width() - 1),
+                      std::min(v >> shift, normals->height() - 1));
   }
 };
 NormalLookup normals_for(const FramePyramid& pyramid, int level);
@@ -54,7 +58,8 @@ DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& par
 DepthImage downsample_depth(const DepthImage& depth, float max_depth_step, RowPool* pool = nullptr);
 
 /// Normals from central differences at ±offset pixels; NaN where a neighbour is missing or a
-/// difference is longer than max_jump × z × offset (a depth edge).
+/// difference's depth change exceeds max_jump × z per pixel of its 2·offset span, i.e.
+/// max_jump × z × 2·offset (a depth edge).
 NormalMap compute_normal_map(const VertexMap& vertices, int offset, float max_jump,
                              RowPool* pool = nullptr);
 

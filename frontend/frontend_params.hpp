@@ -21,14 +21,14 @@ struct PreprocessParams {
   float pyramid_max_depth_step = 0.05f;  // m
   /// Normals are the cross product of central differences at ±normal_offset pixels at full
   /// resolution (level l uses ±max(1, normal_offset / 2^l): the same support in the scene). A
-  /// difference longer than normal_max_jump × z marks a depth edge,
-  /// where no normal is computed.
+  /// difference whose depth changes by more than normal_max_jump × z per pixel of its span
+  /// (2 · offset pixels) marks a depth edge, where no normal is computed.
   int normal_offset = 4;  // px
   /// false: level 0 gets no normal map of its own and borrows level 1's (the same support in the
   /// scene at a quarter of the cost); ICP at level 0 then pairs full-resolution vertices with
   /// them. true: level 0 has its own normals (for consumers that need them).
   bool full_resolution_normals = false;
-  float normal_max_jump = 0.08f;  // fraction of z per pixel of offset
+  float normal_max_jump = 0.08f;  // fraction of z per pixel the difference spans
 
   /// Throws InputError "field: problem" for the first invalid field.
   void validate() const;

@@ -40,6 +40,25 @@ TEST(FramePyramid, ThreeLevelsHalvingTheCamera) {
   EXPECT_EQ(&n0(301, 199), &p.levels[1].normals(150, 99));
 }
 
+// Level 1 of a 97x65 frame is 48x32: full-resolution column 96 and row 64 map to coarse
+// column 48 and row 32, one past the map. The lookup reads the last column and row instead.
+TEST(FramePyramid, OddSizedFramesBorrowNormalsInsideTheCoarseMap) {
+  const Eigen::Isometry3d T_wc = test::look_from({0, 0, 1}, {0.5, 2, 1.2});
+  const FramePyramid p = preprocess(test::render_at(wall(), T_wc, 97, 65));
+  const NormalLookup n0 = normals_for(p, 0);
+  ASSERT_EQ(n0.normals->width(), 48);
+  ASSERT_EQ(n0.normals->height(), 32);
+  const Eigen::Vector3f* first = n0.normals->data();
+  const Eigen::Vector3f* end = first + n0.normals->size();
+  for (int v = 0; v < 65; ++v) {
+    for (int u = 0; u < 97; ++u) {
+      const Eigen::Vector3f* n = &n0(u, v);
+      ASSERT_TRUE(n >= first && n < end) << "pixel " << u << ", " << v;
+    }
+  }
+  EXPECT_EQ(&n0(96, 64), &(*n0.normals)(47, 31));
+}
+
 TEST(FramePyramid, NormalsOfAPlaneAreExactAndFaceTheCamera) {
   const Eigen::Isometry3d T_wc = test::look_from({0, 0, 1}, {0.5, 2, 1.2});
   const Eigen::Vector3f expected =
