@@ -22,9 +22,10 @@ Eigen::Matrix2d shape_operator(const HeightField& h) {
 
 // Fits the height field to the samples around (u, v), in the frame R at p̄. The coordinates are
 // scaled by 1/ρ (ρ = RMS radius of the samples) so the 6x6 normal equations are well conditioned.
-bool fit_height_field(const VertexMap& vertices, const NeighbourhoodPattern& pattern, int u, int v,
-                      const Eigen::Matrix3d& R, const Eigen::Vector3d& centre, int min_samples,
-                      HeightField& h) {
+// Returns kValid, kTooFewSamples, or kSingular (e.g. all samples on one line).
+QuadricStatus fit_height_field(const VertexMap& vertices, const NeighbourhoodPattern& pattern,
+                               int u, int v, const Eigen::Matrix3d& R,
+                               const Eigen::Vector3d& centre, int min_samples, HeightField& h) {
   // Two passes over the samples: the scale first, then the scaled normal equations.
   auto for_each_sample = [&](auto&& f) {
     for (const PixelOffset& o : pattern.offsets) {
@@ -39,7 +40,8 @@ bool fit_height_field(const VertexMap& vertices, const NeighbourhoodPattern& pat
     radius2 += l.head<2>().squaredNorm();
     ++n;
   });
-  if (n < min_samples || !(radius2 > 0.0)) return false;
+  if (n < min_samples) return QuadricStatus::kTooFewSamples;
+  if (!(radius2 > 0.0)) return QuadricStatus::kSingular;
   const double k = 1.0 / std::sqrt(radius2 / n);
   Eigen::Matrix<double, 6, 6> AtA = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> Atz = Eigen::Matrix<double, 6, 1>::Zero();
@@ -51,14 +53,14 @@ bool fit_height_field(const VertexMap& vertices, const NeighbourhoodPattern& pat
     Atz += row * z;
   });
   const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(AtA.selfadjointView<Eigen::Lower>());
-  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
+  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return QuadricStatus::kSingular;
   const Eigen::Matrix<double, 6, 1> s = ldlt.solve(Atz);
   // Rank deficiency (e.g. all samples on one line) shows up as a non-finite or huge solution.
   if (!s.allFinite() || ldlt.vectorD().minCoeff() <= 1e-12 * ldlt.vectorD().maxCoeff())
-    return false;
+    return QuadricStatus::kSingular;
   // Undo the scaling: z k = A' (k x)² + ... ⇒ A = A' k, D = D', F = F' / k.
   h = HeightField{s(0) * k, s(1) * k, s(2) * k, s(3), s(4), s(5) / k};
-  return true;
+  return QuadricStatus::kValid;
 }
 
 }  // namespace
@@ -107,8 +109,10 @@ QuadricMap LeastSquaresQuadric::estimate(const VertexMap& vertices,
       const Eigen::Matrix3d R = local_frame<double>(normals(u, v).cast<double>().normalized());
       const Eigen::Vector3d centre = vertices(u, v).cast<double>();
       HeightField h;
-      if (!fit_height_field(vertices, pattern, u, v, R, centre, params_.fit.min_samples, h)) {
-        map.set_invalid(u, v, QuadricStatus::kTooFewSamples);
+      const QuadricStatus fitted =
+          fit_height_field(vertices, pattern, u, v, R, centre, params_.fit.min_samples, h);
+      if (fitted != QuadricStatus::kValid) {
+        map.set_invalid(u, v, fitted);
         continue;
       }
       Quadricd q;  // the record keeps the second-order terms; curvature comes from I⁻¹ II

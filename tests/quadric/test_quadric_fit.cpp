@@ -207,6 +207,20 @@ TEST(QuadricFit, IsolatedPixelsAreFlaggedNotZero) {
     ASSERT_TRUE(std::isnan(k.x()));
 }
 
+// Depth on one image row only: every neighbourhood's samples lie on one line, enough of them,
+// but rank-deficient. Quad LS says singular, not too few samples.
+TEST(LeastSquaresQuadric, CollinearSamplesAreSingularNotTooFew) {
+  const CameraIntrinsics camera = synthetic_camera(160, 120);
+  DepthImage depth(camera.width, camera.height, 0.0f);
+  for (int u = 0; u < camera.width; ++u)
+    depth(u, 60) = 2.0f;
+  const NormalMap normals(camera.width, camera.height, Eigen::Vector3f(0.0f, 0.0f, -1.0f));
+  const QuadricMap map = LeastSquaresQuadric().estimate(compute_vertex_map(depth, camera), normals);
+  for (int u = 20; u < 140; ++u)
+    EXPECT_EQ(map.status(u, 60), QuadricStatus::kSingular) << "pixel " << u;
+  EXPECT_EQ(map.valid_count(), 0u);
+}
+
 double rms_error(const QuadricMap& map, const CurvatureImage& gt, const QuadricMap& other) {
   double sum = 0.0;
   int n = 0;
