@@ -78,7 +78,7 @@ class PixelGroupFit {
                       offsets_.data(), static_cast<int>(offsets_.size()), !last, sums_);
       if (!last) pixel_lane_steps(sums_, p_.damping, delta_, ok_);
       for (int l = 0; l < kPixelLanes; ++l)
-        decide(l, last);
+        decide(l, it == 0, last);
       // Undone lanes return to their previous quadric; stepping lanes keep theirs as previous.
       for (int i = 0; i < LaneQuadrics::kRows; ++i) {
         for (int l = 0; l < kPixelLanes; ++l) {
@@ -143,23 +143,25 @@ class PixelGroupFit {
     }
   }
 
-  // Lane l after a pass: undo_ where the last step raised the mean weighted cost, take_ where
-  // it takes another step; every other active lane stops here (or is invalid).
-  void decide(int l, bool last) {
+  // Lane l after a pass: undo_ where the last step raised the mean weighted cost or left fewer
+  // than min_samples inliers, take_ where it takes another step; every other active lane stops
+  // here (or is invalid).
+  void decide(int l, bool first, bool last) {
     undo_[l] = take_[l] = false;
     if (!active_[l]) return;
     active_[l] = false;
     const int count = static_cast<int>(sums_.count[l]);
     const double cost = double(sums_.inliers[l]) / std::max(1, count);  // mean Σ w r², inliers
-    if (cost > previous_cost_[l]) {  // the last step made the fit worse: undo it and stop
+    const bool too_few = count < p_.min_samples;
+    if (cost > previous_cost_[l] || (!first && too_few)) {  // as fit_quadric_pixel
       undo_[l] = true;
       return;
     }
-    if (last) return;
-    if (count < p_.min_samples) {
+    if (too_few) {  // the starting plane
       status_[l] = QuadricStatus::kTooFewSamples;
       return;
     }
+    if (last) return;
     if (!ok_[l]) {
       status_[l] = QuadricStatus::kSingular;
       return;

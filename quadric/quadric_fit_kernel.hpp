@@ -157,12 +157,15 @@ JPCR_HD QuadricStatus fit_quadric_pixel(const VertexView& vertices, const PixelO
     NormalEquations6<Scalar> ne;
     accumulate_quadric_samples(q, vertices, pattern, pattern_size, u, v, p, ne);
     const double cost = double(ne.cost) / (ne.count > 0 ? ne.count : 1);
-    if (cost > previous_cost) {  // the last step made the fit worse: undo it and stop
+    const bool too_few = ne.count < p.min_samples;
+    // A step that made the fit worse, or left fewer than min_samples inliers (method.md §3: a
+    // fit on fewer is invalid), is undone, and the fit stops.
+    if (cost > previous_cost || (it > 0 && too_few)) {
       q = previous;
       break;
     }
+    if (too_few) return QuadricStatus::kTooFewSamples;  // the starting plane
     if (it == p.iterations) break;
-    if (ne.count < p.min_samples) return QuadricStatus::kTooFewSamples;
     previous = q;
     previous_cost = cost;
     Eigen::Matrix<double, 6, 1> delta;
