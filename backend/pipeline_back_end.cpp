@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <exception>
 #include <stdexcept>
 
 #include "jpcr/frontend/frame_pyramid.hpp"
@@ -125,6 +126,7 @@ PipelineBackEnd::PipelineBackEnd(const PipelineParams& params, CurvatureSink sin
 PipelineBackEnd::~PipelineBackEnd() = default;
 
 const PipelineFrame& PipelineBackEnd::add(const PipelineFrame& tracked, const Frame* keyframe) {
+  if (finished_) throw std::logic_error("PipelineBackEnd::add after finish()");
   if (tracked.index != static_cast<int>(frame_count()))
     throw InputError("frame " + std::to_string(tracked.index) + " arrived as frame " +
                      std::to_string(frame_count()) + " (frames lost or reordered)");
@@ -139,12 +141,32 @@ const PipelineFrame& PipelineBackEnd::add(const PipelineFrame& tracked, const Fr
   frames_.push_back(tracked);
   frames_.back().keyframe = static_cast<int>(keyframe_count()) - 1;
   emit_final_frames();
+  rethrow_sink_error();
   return frames_.back();
 }
 
 void PipelineBackEnd::set_frame_sink(FrameSink sink) {
   frame_sink_ = std::move(sink);
   emit_final_frames();
+  rethrow_sink_error();
+}
+
+// A sink's exception waits until the back end has finished the call that made it, so that the
+// back end's state stays whole; the first one then reaches the caller.
+template <typename Call>
+void PipelineBackEnd::call_sink(Call&& call) {
+  try {
+    call();
+  } catch (...) {
+    if (!sink_error_) sink_error_ = std::current_exception();
+  }
+}
+
+void PipelineBackEnd::rethrow_sink_error() {
+  if (!sink_error_) return;
+  std::exception_ptr e = sink_error_;
+  sink_error_ = nullptr;
+  std::rethrow_exception(e);
 }
 
 // Without refiners every correction is the identity: the front end's poses stay as they are.
@@ -166,7 +188,7 @@ void PipelineBackEnd::emit_final_frames() {
   while (emitted_ < frame_count()) {
     const PipelineFrame& f = frame(emitted_);
     if (!is_final(f)) break;
-    if (frame_sink_) frame_sink_(f, refined_pose(emitted_), verdicts(emitted_));
+    if (frame_sink_) call_sink([&] { frame_sink_(f, refined_pose(emitted_), verdicts(emitted_)); });
     ++emitted_;
   }
   if (!params_.keep_history) forget_emitted();
@@ -286,6 +308,7 @@ void PipelineBackEnd::finish() {
   final_keyframes_ = keyframe_count();
   finished_ = true;
   emit_final_frames();
+  rethrow_sink_error();
 }
 
 void PipelineBackEnd::emit_curvature(std::size_t slot, const QuadricMap& quadrics) {
@@ -293,13 +316,15 @@ void PipelineBackEnd::emit_curvature(std::size_t slot, const QuadricMap& quadric
   keyframe_at(window_->keyframes[slot]).curvature = refined ? window_->sources[slot] : "quad-it";
   if (!sink_) return;
   const Frame& frame = window_->frames[slot];
+  const int keyframe = window_->keyframes[slot];
   if (refined) {
-    sink_(window_->keyframes[slot], frame, quadrics);
+    call_sink([&] { sink_(keyframe, frame, quadrics); });
     return;
   }
-  const QuadricFit fit(params_.joint.quadric);
-  sink_(window_->keyframes[slot], frame,
-        fit.estimate(compute_vertex_map(frame.depth, frame.camera)));
+  call_sink([&] {
+    const QuadricFit fit(params_.joint.quadric);
+    sink_(keyframe, frame, fit.estimate(compute_vertex_map(frame.depth, frame.camera)));
+  });
 }
 
 const PipelineFrame& PipelineBackEnd::frame(std::size_t index) const {

@@ -28,6 +28,7 @@
 // Poses are camera-to-world (T_wc, method.md §1); the first frame's pose is the gauge.
 #pragma once
 
+#include <exception>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -140,8 +141,13 @@ class PipelineBackEnd {
   /// set here). `keyframe` is the frame's depth when the front end made it a keyframe (the first
   /// frame always is), else null; a keyframe is refined when it completes a pair or a window.
   /// Throws InputError, with nothing changed, for a frame out of order and for a keyframe whose
-  /// camera differs from the first keyframe's. A refiner that throws does not reach the caller:
-  /// the refinement's verdict is kError and the keyframe keeps the front end's motion.
+  /// camera differs from the first keyframe's; std::logic_error after finish(). A refiner that
+  /// throws does not reach the caller: the refinement's verdict is kError and the keyframe keeps
+  /// the front end's motion. A sink (CurvatureSink, FrameSink) that throws: the frame is added
+  /// and the call completes (later sinks still run), then the first sink exception reaches the
+  /// caller; what that sink was handed is not handed again. The same holds for finish() and
+  /// set_frame_sink(). Runs the refinements in the calling thread: a J-full window takes
+  /// seconds on the CPU, so a live system calls add() from its own back-end thread.
   const PipelineFrame& add(const PipelineFrame& tracked, const Frame* keyframe);
   /// Refines what is left (the last partial window) and hands every frame still open to the
   /// FrameSink; call once after the last frame.
@@ -179,6 +185,9 @@ class PipelineBackEnd {
   void refine_window();
   void emit_curvature(std::size_t slot, const QuadricMap& quadrics);
   void emit_final_frames();
+  template <typename Call>
+  void call_sink(Call&& call);
+  void rethrow_sink_error();
   void forget_emitted();
   bool interpolates() const;
   bool is_final(const PipelineFrame& frame) const;
@@ -198,6 +207,7 @@ class PipelineBackEnd {
   std::size_t final_keyframes_ = 0;  // keyframes [0, final_keyframes_) have their final pose
   std::size_t emitted_ = 0;          // frames [0, emitted_) went to the FrameSink
   bool finished_ = false;
+  std::exception_ptr sink_error_;  // the first sink exception of the current call
 };
 
 }  // namespace jpcr

@@ -412,6 +412,48 @@ TEST(PipelineHistory, AKeyframeFromAnotherCameraIsRefusedAndTheBackEndStaysAsItW
   EXPECT_NEAR(correction(back_end, 2).y(), 2e-3, 1e-12);  // the stand-in window: y + 2 mm · j
 }
 
+// A sink that throws (a full disk, a lost publisher) reaches the caller once the frame is added:
+// the back end stays whole and the next frame is accepted. add() after finish() is a logic error.
+TEST(PipelineHistory, ASinkThatThrowsReachesTheCallerAndTheBackEndGoesOn) {
+  PipelineParams p;
+  p.method = PipelineMethod::kJointFtf;
+  std::vector<int> maps;
+  PipelineBackEnd back_end(
+      p,
+      [&](int keyframe, const Frame&, const QuadricMap&) {
+        maps.push_back(keyframe);
+        if (keyframe == 1) throw std::runtime_error("disk full");
+      },
+      shifting);
+  std::vector<int> frames;
+  back_end.set_frame_sink([&](const PipelineFrame& f, const StampedPose&, const FrameVerdicts&) {
+    frames.push_back(f.index);
+    if (f.index == 0) throw std::runtime_error("publisher gone");
+  });
+  Frame keyframe;
+  keyframe.camera = CameraIntrinsics{}.resized(64, 48);
+  keyframe.depth = DepthImage(64, 48, 2.0f);  // a wall: Quad IT gives the maps
+  back_end.add(walk_frame(0), &keyframe);
+  // Keyframe 1 completes the pair: keyframe 0's map and frame 0 go to the sinks; frame 0's throws.
+  try {
+    back_end.add(walk_frame(1), &keyframe);
+    ADD_FAILURE() << "the sink's exception did not reach the caller";
+  } catch (const std::runtime_error& e) {
+    EXPECT_STREQ(e.what(), "publisher gone");
+  }
+  EXPECT_EQ(back_end.frame_count(), 2u);
+  EXPECT_EQ(back_end.keyframe_count(), 2u);
+  // Keyframe 2: keyframe 1's map throws; frame 1 still reaches the frame sink.
+  EXPECT_THROW(back_end.add(walk_frame(2), &keyframe), std::runtime_error);
+  EXPECT_EQ(back_end.frame_count(), 3u);
+  back_end.add(walk_frame(3), &keyframe);
+  back_end.finish();
+  EXPECT_EQ(maps, (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_EQ(frames, (std::vector<int>{0, 1, 2, 3}));
+  EXPECT_EQ(back_end.keyframe(3).pair->verdict, RefinementVerdict::kConverged);
+  EXPECT_THROW(back_end.add(walk_frame(4), &keyframe), std::logic_error);
+}
+
 // used_front_end says whether the keyframe's pose is the front end's motion from the previous
 // keyframe, i.e. no refinement that covers it succeeded.
 TEST(PipelineHistory, UsedFrontEndSaysWhetherNoRefinementMovedTheKeyframe) {
