@@ -95,6 +95,13 @@ void require_output_apart_from(const std::string& target, const std::string& inp
   if (fs::equivalent(target, input, ec))
     throw InputError(target + ": the output directory is " + option + " " + input +
                      " itself; writing there would replace its own files (give another --out)");
+  // Another dataset (a copy of the input, a second sequence): its curvature/ ground truth has
+  // one of the layout's names.
+  for (const char* list : {"depth.txt", "associations.txt"}) {
+    if (fs::exists(fs::path(target) / list, ec))
+      throw InputError(target + ": the output directory holds a dataset (" + list +
+                       "); writing there would replace its files (give another --out)");
+  }
 }
 
 }  // namespace jpcr

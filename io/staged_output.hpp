@@ -45,9 +45,10 @@ class StagedOutput {
   bool committed_ = false;
 };
 
-/// Throws InputError when `target` is `input` itself (the same directory after links and ".."):
-/// commit() would replace the input's own entries of the layout's names, e.g. the curvature/
-/// ground truth of a synthetic dataset. `option` names the input in the message ("--dataset").
+/// Throws InputError when `target` is `input` itself (the same directory after links and ".."),
+/// or holds another dataset (depth.txt or associations.txt): commit() would replace the
+/// dataset's entries of the layout's names, e.g. the curvature/ ground truth of a synthetic
+/// dataset. `option` names the input in the message ("--dataset").
 void require_output_apart_from(const std::string& target, const std::string& input,
                                const std::string& option);
 

@@ -79,6 +79,11 @@ cp "$tmp/seq/curvature/0.000000.npy" "$tmp/truth.npy"
 expect 1 "is --dataset .* itself" -- "$curv" --dataset "$tmp/seq" --out "$tmp/seq/"
 expect 1 "is --dataset .* itself" -- "$curv" --dataset "$tmp/seq" --out "$tmp/it/../seq"
 cmp -s "$tmp/truth.npy" "$tmp/seq/curvature/0.000000.npy" || { echo "FAIL: ground truth changed"; fail=1; }
+# OUT = another dataset (here a copy): its ground truth is kept too.
+cp -r "$tmp/seq" "$tmp/seq_copy"
+expect 1 "holds a dataset (depth.txt)" -- "$curv" --dataset "$tmp/seq" --out "$tmp/seq_copy"
+cmp -s "$tmp/truth.npy" "$tmp/seq_copy/curvature/0.000000.npy" ||
+  { echo "FAIL: the copy's ground truth changed"; fail=1; }
 # A pattern that cannot be scaled to the images fails before the run, naming the file.
 printf 'quadric:\n  pattern:\n    reference_width: 1\n' > "$tmp/tiny_ref.yaml"
 expect 1 "tiny_ref.yaml: quadric: pattern (radius 6, stride 3 at reference_width 1) scaled to 160 px wide" -- \
