@@ -215,6 +215,7 @@ void read_pipeline(YamlSection yaml, PipelineParams& p) {
   yaml.read("window", p.window);
   if (p.window < 2 || p.window > kMaxWindowFrames)
     yaml.fail("window", "must be in [2, " + std::to_string(kMaxWindowFrames) + "] keyframes");
+  yaml.read("keep_history", p.keep_history);
   yaml.read("interpolate_corrections", p.interpolate_corrections);
   yaml.read("filtered_depth", p.filtered_depth);
   yaml.finish();

@@ -79,6 +79,21 @@ if [ $rc != 0 ] || ! grep -q "processed 2 frames.*stopped by --idle-timeout" "$t
 else
   echo "ok: $(tail -1 "$tmp/idle.txt")"
 fi
+# keep_history: false, an unattended run: J-full windows of 3 (every frame a keyframe) forget final frames
+# and still publishes every keyframe's map.
+printf 'dds:\n  history_depth: 32\n  image_history_depth: 16\npipeline:\n  keep_history: false\n  window: 3\n' \
+  > "$tmp/forget.yaml"
+"$node" --params "$tmp/forget.yaml" --domain $domain --method j-full --max-frames 6 \
+  --idle-timeout 60 > "$tmp/forget.txt" 2>&1 &
+forget_pid=$!; pids+=($forget_pid)
+expect 0 "published 6 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 \
+  --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
+wait_bounded $forget_pid 200; rc=$?
+if [ $rc != 0 ] || ! grep -q "processed 6 frames, 6 keyframes, 6 curvature maps" "$tmp/forget.txt"; then
+  echo "FAIL: keep_history false: exit $rc"; cat "$tmp/forget.txt"; fail=1
+else
+  echo "ok: keep_history false: $(grep processed "$tmp/forget.txt")"
+fi
 "$node" "${dds[@]}" > "$tmp/term.txt" 2>&1 &
 term_pid=$!; pids+=($term_pid)
 sleep 1.5; kill -TERM $term_pid; wait_bounded $term_pid 20; rc=$?

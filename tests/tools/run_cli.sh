@@ -102,6 +102,9 @@ expect 2 "--window must be in" -- "$run" --dataset "$tmp/seq" --window 1 --out "
 expect 1 "error: .*nowhere" -- "$run" --dataset "$tmp/nowhere" --out "$tmp/x"
 printf 'pipeline:\n  window: 99\n' > "$tmp/bad.yaml"
 expect 1 "window" -- "$run" --dataset "$tmp/seq" --params "$tmp/bad.yaml" --out "$tmp/x"
+printf 'pipeline:\n  keep_history: false\n' > "$tmp/forget.yaml"
+expect 1 "forget.yaml: pipeline.keep_history: false is for live runs" -- \
+  "$run" --dataset "$tmp/seq" --params "$tmp/forget.yaml" --out "$tmp/x"
 # OUT = the dataset would replace the generator's curvature/ ground truth there.
 expect 1 "is --dataset .* itself" -- "$run" --dataset "$tmp/seq" --out "$tmp/seq"
 [ -d "$tmp/seq/curvature" ] && [ ! -e "$tmp/seq/trajectory.txt" ] ||

@@ -82,6 +82,10 @@ int run_main(int argc, char** argv) {
     if (!args.parse(argc, argv)) return 0;
     Params params;
     PipelineParams pipeline = cli::pipeline_params_from(args, &params);
+    if (!pipeline.keep_history)
+      throw InputError(args.get("params") +
+                       ": pipeline.keep_history: false is for live runs (jpcr_node); jpcr_run "
+                       "writes every frame's pose and needs true");
     std::optional<CameraIntrinsics> camera;
     if (args.has("config")) camera = load_camera_yaml(args.get("config"));
     const std::unique_ptr<FrameSource> dataset =
