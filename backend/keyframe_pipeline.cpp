@@ -18,6 +18,7 @@ PipelineFrame PipelineFrontEnd::track(const Frame& frame, bool* keyframe) {
   f.icp_verdict = first ? IcpVerdict::ok : track.icp.verdict;
   f.kept_last_motion = track.kept_last_motion;
   if (!first) f.icp_covariance = track.icp.covariance;
+  f.pose_covariance = track.pose_covariance;
   f.track_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
   // The single methods refine every consecutive frame; the pipeline follows the front end.
   *keyframe = first || track.is_keyframe || method_ != PipelineMethod::kPipeline;

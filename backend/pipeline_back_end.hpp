@@ -80,6 +80,9 @@ struct PipelineFrame {
   /// The front end's ICP covariance of the frame's alignment (IcpResult::covariance, over
   /// x, y, z, rx, ry, rz); zero for the first frame, which is the gauge.
   Matrix6d icp_covariance = Matrix6d::Zero();
+  /// The front end's covariance of its T_wc along the chain of alignments
+  /// (TrackResult::pose_covariance: a left update in world axes); zero for the first frame.
+  Matrix6d pose_covariance = Matrix6d::Zero();
   double track_ms = 0.0;
 };
 

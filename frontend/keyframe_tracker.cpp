@@ -99,9 +99,15 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
     if (is_good(r.icp)) {
       r.T_wc.pose = T_w_ref * r.icp.pose;
       last_good_motion_ = previous_pose_.inverse() * r.T_wc.pose;
+      last_good_icp_covariance_ = r.icp.covariance;
+      const Matrix6d Ad = se3_adjoint(T_w_ref);
+      r.pose_covariance = (to_keyframe ? keyframe_.pose_covariance : previous_covariance_) +
+                          Ad * r.icp.covariance * Ad.transpose();
     } else {
       r.T_wc.pose = previous_pose_ * last_good_motion_;  // say so rather than drift silently
       r.kept_last_motion = true;
+      const Matrix6d Ad = se3_adjoint(previous_pose_);
+      r.pose_covariance = previous_covariance_ + Ad * last_good_icp_covariance_ * Ad.transpose();
     }
     // Keyframe policy: far enough from the keyframe, or too little overlap with it. A failed
     // alignment against the keyframe starts a new one, or tracking could never recover; but
@@ -117,11 +123,13 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
     keyframe_.index = r.index;
     keyframe_.frame = frame;
     keyframe_.T_wc = r.T_wc;
+    keyframe_.pose_covariance = r.pose_covariance;
     keyframe_.pyramid = pyramid;
     keyframe_indices_.push_back(r.index);
   }
   previous_ = std::move(pyramid);
   previous_pose_ = r.T_wc.pose;
+  previous_covariance_ = r.pose_covariance;
   ++frames_;
   return r;
 }

@@ -23,6 +23,7 @@ struct Keyframe {
   int index = -1;  // position of the frame in the tracked sequence (0-based)
   Frame frame;
   StampedPose T_wc;
+  Matrix6d pose_covariance = Matrix6d::Zero();  // TrackResult::pose_covariance
   std::shared_ptr<const FramePyramid> pyramid;
 };
 
@@ -31,6 +32,12 @@ struct TrackResult {
   int reference = -1;  // index of the frame it was aligned to; −1 for the first frame
   StampedPose T_wc;    // camera-to-world estimate
   IcpResult icp;       // the alignment (default-constructed for the first frame)
+  /// Covariance of T_wc as the chain of alignments from the first frame (the gauge: zero)
+  /// gives it: ξ of a left update exp(ξ^) T_wc in world axes, (v, ω) as IcpResult::covariance.
+  /// Σ = Σ_ref + Ad(T_w,ref) Σ_icp Ad(T_w,ref)ᵀ (first-order, independent alignments); a frame
+  /// that kept the last motion adds the last good alignment's Σ_icp at the previous frame.
+  /// position_rotation_covariance (se3.hpp) turns it into ROS's (x, y, z, rx, ry, rz) order.
+  Matrix6d pose_covariance = Matrix6d::Zero();
   bool is_keyframe = false;
   bool kept_last_motion = false;  // the alignment failed; T_wc extrapolates the last good motion
   double overlap = 1.0;           // fraction of the frame's points that the keyframe also sees
@@ -68,6 +75,8 @@ class KeyframeTracker {
   std::shared_ptr<const FramePyramid> previous_;
   Eigen::Isometry3d previous_pose_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_good_motion_ = Eigen::Isometry3d::Identity();  // T_prev,cur
+  Matrix6d previous_covariance_ = Matrix6d::Zero();       // the previous frame's pose_covariance
+  Matrix6d last_good_icp_covariance_ = Matrix6d::Zero();  // of the last good alignment
 };
 
 }  // namespace jpcr

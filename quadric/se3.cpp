@@ -91,6 +91,12 @@ Matrix6d se3_adjoint(const Eigen::Isometry3d& T) {
   return Ad;
 }
 
+Matrix6d position_rotation_covariance(const Matrix6d& left_covariance, const Eigen::Vector3d& t) {
+  Matrix6d J = Matrix6d::Identity();
+  J.topRightCorner<3, 3>() = -skew(t);  // ω × t = −[t]× ω
+  return J * left_covariance * J.transpose();
+}
+
 double rotation_angle(const Eigen::Matrix3d& R) {
   return so3_log(R).norm();
 }

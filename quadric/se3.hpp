@@ -28,6 +28,11 @@ Vector6d se3_log(const Eigen::Isometry3d& T);
 /// Adjoint of T for the (v, ω) ordering: T exp(ξ^) T⁻¹ = exp((Ad_T ξ)^).
 Matrix6d se3_adjoint(const Eigen::Isometry3d& T);
 
+/// The covariance of a pose's (position, rotation vector) error in the reference axes, the order
+/// of ROS's PoseWithCovariance (x, y, z, rx, ry, rz), from the covariance of ξ = (v, ω) of a left
+/// update exp(ξ^) T, T's translation being t: to first order δt = v + ω × t and δθ = ω.
+Matrix6d position_rotation_covariance(const Matrix6d& left_covariance, const Eigen::Vector3d& t);
+
 /// Rotation angle of R in radians, in [0, π], accurate for small angles.
 double rotation_angle(const Eigen::Matrix3d& R);
 

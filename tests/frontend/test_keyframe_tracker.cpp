@@ -121,6 +121,36 @@ TEST(KeyframeTracker, AFailedFrameKeepsTheLastGoodMotion) {
   EXPECT_LT(test::translation_error(results[4].T_wc.pose, seq.ground_truth(4).value()), 2e-3);
 }
 
+// The pose covariance is zero for the gauge and grows along the chain: each frame's is its
+// reference's plus its alignment's carried into world axes; a frame that kept the last motion
+// adds the last good alignment's again.
+TEST(KeyframeTracker, PoseCovarianceAccumulatesAlongTheChainOfAlignments) {
+  const SyntheticSequence seq = rail(5);
+  FrontendParams params;
+  params.tracker.mode = TrackingMode::frame_to_frame;
+  KeyframeTracker tracker(params, seq.ground_truth(0).value());
+  std::vector<TrackResult> r;
+  for (std::size_t i = 0; i < 5; ++i) {
+    Frame f = seq.load(i);
+    if (i == 4) f.depth = DepthImage(f.depth.width(), f.depth.height(), 0.0f);  // blackout
+    r.push_back(tracker.track(f));
+  }
+  EXPECT_EQ(r[0].pose_covariance, Matrix6d::Zero());
+  for (std::size_t i = 1; i < 5; ++i) {
+    const Matrix6d step = r[i].pose_covariance - r[i - 1].pose_covariance;
+    const Matrix6d& icp = i < 4 ? r[i].icp.covariance : r[3].icp.covariance;
+    const Matrix6d Ad = se3_adjoint(r[i - 1].T_wc.pose);
+    EXPECT_LT((step - Ad * icp * Ad.transpose()).norm(), 1e-9 * step.norm()) << "frame " << i;
+    EXPECT_GT(step.trace(), 0.0) << "frame " << i;
+    // Carried into world axes, not added in the camera's: the trace of the rotation block is
+    // kept, the translation block gains the lever arm of the rotation.
+    const double rotation_in_world = step.bottomRightCorner<3, 3>().trace();
+    const double rotation_in_camera = icp.bottomRightCorner<3, 3>().trace();
+    EXPECT_NEAR(rotation_in_world, rotation_in_camera, 1e-9 * icp.trace());
+  }
+  EXPECT_TRUE(r[4].kept_last_motion);
+}
+
 TEST(KeyframeTracker, WrongSizedFrameIsAnInputError) {
   KeyframeTracker tracker;
   Frame f;

@@ -12,9 +12,11 @@ void PipelinePublisher::keyframe_final(const PipelineBackEnd& pipeline, int keyf
 }
 
 void PipelinePublisher::frame_added(const PipelineBackEnd& pipeline, const PipelineFrame& frame) {
-  // The frame's own pose only: copying the whole trajectory per frame grew with the run.
-  publisher_.publish_odometry(pipeline.refined_pose(static_cast<std::size_t>(frame.index)),
-                              frame.icp_covariance);
+  // The frame's own pose only: copying the whole trajectory per frame grew with the run. Its
+  // covariance is the front end's along its chain of alignments, in ROS's order.
+  const StampedPose pose = pipeline.refined_pose(static_cast<std::size_t>(frame.index));
+  publisher_.publish_odometry(
+      pose, position_rotation_covariance(frame.pose_covariance, pose.pose.translation()));
   path_if_refined(pipeline);
 }
 

@@ -2,7 +2,8 @@
 // deployment) produces on the jpcr result topics (DdsResultPublisher), for jpcr_node and
 // jpcr_run --dds:
 //   odom             after every frame: the frame's current refined pose (trajectory().back())
-//                    with the front end's ICP covariance (PipelineFrame::icp_covariance; zero
+//                    with the front end's pose covariance accumulated along its alignments
+//                    (PipelineFrame::pose_covariance in ROS's x, y, z, rx, ry, rz order; zero
 //                    for the first frame, the gauge); not in the split deployment, where the
 //                    front-end process publishes its own poses
 //   keyframe_pose,   when a keyframe's curvature map is final (the pipeline's CurvatureSink):

@@ -94,7 +94,9 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
       [&](const Frame& frame) {
         bool keyframe = false;
         const PipelineFrame f = front_end.track(frame, &keyframe);
-        results.publish_odometry(f.front_end, f.icp_covariance);
+        results.publish_odometry(
+            f.front_end,
+            position_rotation_covariance(f.pose_covariance, f.front_end.pose.translation()));
         if (!keyframe) {
           tracked.push_back(f.front_end);
         } else {
@@ -193,12 +195,14 @@ int node_main(int argc, char** argv) {
       "(with its camera_info) goes through the keyframe pipeline (--method pipeline: ICP-ftf\n"
       "front end, J-ftf per keyframe pair, J-full per window; or one of the paper's methods).\n"
       "Publishes under dds.topic_prefix (default rt/jpcr/): odom per frame (the frame's\n"
-      "refined-so-far pose with the front end's ICP covariance, zero for the first frame),\n"
+      "refined-so-far pose with the front end's covariance of it, accumulated along its\n"
+      "alignments in map axes, zero for the first frame),\n"
       "keyframe_pose + curvature (32FC2) + curvature_color (rgb8) when a keyframe's map is\n"
       "final, and path (all refined poses, transient local) after every keyframe and at the\n"
       "end. For unattended runs set pipeline.keep_history: false in --params: each frame is\n"
       "forgotten once its pose is final and published, so memory stays bounded, and path\n"
-      "holds the frames still held. Malformed input samples are dropped with one log line each; frames the node is too\n"
+      "holds the frames still held. Malformed input samples are dropped with one log line each; "
+      "frames the node is too\n"
       "slow for (more than dds.image_history_depth waiting) are dropped, counted and logged.\n"
       "--role frontend / backend split the pipeline over two processes (two hosts) joined by\n"
       "PREFIX keyframe: the front end publishes odom (its own poses) and sends each keyframe\n"
