@@ -18,7 +18,19 @@
 //
 // It is PipelineFrontEnd feeding PipelineBackEnd (pipeline_back_end.hpp) in one process; the
 // split deployment (jpcr_node --role frontend / backend) runs the two halves in two processes.
-// Poses are camera-to-world (T_wc, method.md §1); the first frame's pose is the gauge.
+// Poses are camera-to-world (T_wc, method.md §1); the first frame's pose is the gauge: the
+// identity, so the trajectory is in the first camera's axes (x right, y down, z forward).
+//
+// Threads: an object is used from one thread at a time; distinct objects are independent. add()
+// runs the refinements in the calling thread (a J-full window takes seconds on the CPU at
+// 640x480; the CPU refiners use OpenMP, OMP_NUM_THREADS bounds them), so a live system that
+// must not stall its tracking runs PipelineFrontEnd and PipelineBackEnd on two threads with a
+// queue between them, as jpcr_node --role frontend / backend does over DDS.
+//
+// Errors: InputError for bad input (a frame of another size or camera, bad parameters),
+// std::logic_error for a call out of order (add after finish), and whatever a sink throws
+// (PipelineBackEnd::add). A refiner's failure (divergence, a device error) is a verdict in
+// the report, not an exception.
 #pragma once
 
 #include "jpcr/backend/pipeline_back_end.hpp"

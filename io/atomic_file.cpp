@@ -51,6 +51,11 @@ void ensure_directory(const std::string& dir) {
   }
 }
 
+void ensure_parent_directory(const std::string& file) {
+  const std::string parent = std::filesystem::path(file).parent_path().string();
+  if (!parent.empty()) ensure_directory(parent);
+}
+
 std::string read_file(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::exists(path, ec)) throw InputError(path + ": file does not exist");

@@ -16,6 +16,8 @@ void write_file_atomically(const std::string& path,
 
 /// Creates `dir` and its parents when missing; throws InputError naming it on failure.
 void ensure_directory(const std::string& dir);
+/// ensure_directory of the directory `file` lies in (none for a bare file name).
+void ensure_parent_directory(const std::string& file);
 
 /// Reads a whole regular file into memory; throws InputError naming it when it cannot be read
 /// or is not a regular file (a FIFO, a device).

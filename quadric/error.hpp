@@ -1,5 +1,10 @@
 // The one exception type for bad input: a missing or corrupt file, a malformed line, an invalid
-// configuration. Its message names the file (and line or key) and the problem, ready to print.
+// configuration, a frame that does not fit the stream. Its message names the file (and line or
+// key) and the problem, ready to print. Other exception types mean something else:
+// std::invalid_argument from a plain-struct validate() (CameraIntrinsics, parameter structs used
+// without a file: the caller's values), std::logic_error and std::out_of_range for a call out
+// of order or an index not held, CudaError (cuda/) for a device failure, DdsError (io/dds/) for a
+// Cyclone failure. The command-line tools catch all of them and exit 1.
 #pragma once
 
 #include <stdexcept>

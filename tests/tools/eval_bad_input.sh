@@ -35,5 +35,8 @@ expect 0 "translation 1.0000  \[1.0000, 1.0000\]  indistinguishable" -- \
 expect 0 '"verdict": "indistinguishable"' -- \
   "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --baseline "$tmp/est30.txt" --json
 [ -e "$tmp/report.json" ] && { echo "FAIL: partial report written"; fail=1; }
+# --out in a directory not made yet: made, as the other tools do.
+expect 0 "translation" -- "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --out "$tmp/new/dir/r.json"
+[ -s "$tmp/new/dir/r.json" ] || { echo "FAIL: --out in a new directory not written"; fail=1; }
 ls "$tmp" | grep -q '\.tmp\.' && { echo "FAIL: temporary file left behind"; fail=1; }
 exit $fail

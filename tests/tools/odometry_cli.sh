@@ -80,5 +80,10 @@ mkdir -p "$tmp/adir"
 expect 1 "adir: is a directory" -- "$odo" --dataset "$fr1" --config "$cam" --out "$tmp/x.txt" \
   --summary "$tmp/adir"
 [ -e "$tmp/x.txt" ] || [ -e "$tmp/x/traj.txt" ] && { echo "FAIL: output written after an error"; fail=1; }
+# A summary that cannot be written where --out can: the run fails and leaves no empty --out
+# directory behind.
+expect 1 "/proc/jpcr_nowhere" -- "$odo" --dataset "$fr1" --config "$cam" --frames 2 \
+  --out "$tmp/od3/t.txt" --summary /proc/jpcr_nowhere/s.json
+[ -e "$tmp/od3" ] && { echo "FAIL: an empty od3/ was left behind"; fail=1; }
 ls "$tmp" "$tmp/f2f" | grep -q '\.tmp\.' && { echo "FAIL: temporary file left behind"; fail=1; }
 exit $fail

@@ -114,8 +114,10 @@ int run_curvature(int argc, char** argv) {
       throw InputError(args.get("est") + ": no pixel is valid in both it and " + args.get("gt") +
                        (e.support_radius > 0 ? " with --support " + support : std::string()) +
                        " (" + std::to_string(e.gt_valid) + " valid ground-truth pixels)");
-    if (args.has("out"))
+    if (args.has("out")) {
+      ensure_parent_directory(args.get("out"));
       write_file_atomically(args.get("out"), [&](std::ostream& out) { write_json(out, e); });
+    }
     if (args.get_flag("json")) {
       write_json(std::cout, e);
     } else {

@@ -197,6 +197,7 @@ int run_trajectory(int argc, char** argv) {
     }
 
     if (args.has("out")) {
+      ensure_parent_directory(args.get("out"));
       write_file_atomically(args.get("out"), [&](std::ostream& out) { write_json(out, report); });
     }
     if (args.get_flag("json"))

@@ -10,6 +10,8 @@
 #include <iostream>
 #include <map>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "cli/arguments.hpp"
 #include "cli/progress.hpp"
@@ -36,6 +38,31 @@ struct Run {
   std::vector<TrackResult> frames;
   std::vector<int> keyframes;
 };
+
+// Makes the missing parent directories of `files`; when one cannot be made, removes those it
+// made before throwing, so a failed run leaves no empty directory behind.
+void make_parents(const std::vector<std::string>& files) {
+  namespace fs = std::filesystem;
+  std::vector<fs::path> made;
+  try {
+    for (const std::string& file : files) {
+      std::error_code ec;
+      for (fs::path p = fs::path(file).parent_path(); !p.empty() && !fs::exists(p, ec);
+           p = p.parent_path())
+        made.push_back(p);
+      const std::string parent = fs::path(file).parent_path().string();
+      if (!parent.empty()) ensure_directory(parent);
+    }
+  } catch (...) {
+    std::sort(made.begin(), made.end(), [](const fs::path& a, const fs::path& b) {
+      return a.string().size() > b.string().size();  // deepest first
+    });
+    std::error_code ec;
+    for (const fs::path& p : made)
+      fs::remove(p, ec);  // empty ones only
+    throw;
+  }
+}
 
 void write_summary(std::ostream& out, const Run& run) {
   std::map<std::string, int> verdicts;
@@ -143,6 +170,8 @@ int run(int argc, char** argv) {
         if (!std::filesystem::exists(p, ec)) continue;
         if (!std::filesystem::is_directory(p, ec))
           throw InputError(file + ": " + p.string() + " is not a directory");
+        if (::access(p.c_str(), W_OK | X_OK) != 0)
+          throw InputError(file + ": cannot write in " + p.string());
         break;
       }
     }
@@ -186,10 +215,7 @@ int run(int argc, char** argv) {
     run.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     run.keyframes = tracker.keyframe_indices();
     // Missing parent directories are made only now, so a run that fails creates nothing.
-    for (const std::string& file : {out, summary}) {
-      const std::string parent = std::filesystem::path(file).parent_path().string();
-      if (!parent.empty()) ensure_directory(parent);
-    }
+    make_parents({out, summary});
     // Both files or neither: the trajectory waits beside OUT until the summary is written.
     const std::string staged = out + ".partial-" + std::to_string(::getpid());
     write_trajectory(staged, trajectory, "jpcr_odometry " + run.mode + " on " + dataset);
