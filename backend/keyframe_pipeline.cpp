@@ -5,7 +5,7 @@
 namespace jpcr {
 
 PipelineFrontEnd::PipelineFrontEnd(const PipelineParams& params)
-    : method_(params.method), tracker_(params.frontend) {}
+    : method_(params.method), tracker_(params.frontend, params.initial_pose) {}
 
 PipelineFrame PipelineFrontEnd::track(const Frame& frame, bool* keyframe) {
   using Clock = std::chrono::steady_clock;

@@ -18,8 +18,9 @@
 //
 // It is PipelineFrontEnd feeding PipelineBackEnd (pipeline_back_end.hpp) in one process; the
 // split deployment (jpcr_node --role frontend / backend) runs the two halves in two processes.
-// Poses are camera-to-world (T_wc, method.md §1); the first frame's pose is the gauge: the
-// identity, so the trajectory is in the first camera's axes (x right, y down, z forward).
+// Poses are camera-to-world (T_wc, method.md §1); the first frame's pose is the gauge:
+// PipelineParams::initial_pose, by default the identity, so that the trajectory is in the first
+// camera's axes (x right, y down, z forward).
 //
 // Threads: an object is used from one thread at a time; distinct objects are independent. add()
 // runs the refinements in the calling thread (a J-full window takes seconds on the CPU at

@@ -63,6 +63,9 @@ struct PipelineParams {
   /// 640x480 room_spheres walk, 5.1e-4 m RMS relative error against 1.3e-3 m on the raw depth
   /// (README, "Range noise"). Off by default: the curvature maps then describe the smoothed depth.
   bool filtered_depth = false;
+  /// T_wc of the first frame, the gauge (KeyframeTracker's initial_pose): the trajectory is
+  /// expressed in that world frame (a robot's map or odom frame). Identity: the first camera's.
+  Eigen::Isometry3d initial_pose = Eigen::Isometry3d::Identity();
   FrontendParams frontend;
   JointParams joint;
   IcpBundleParams icp_bundle;

@@ -8,6 +8,7 @@
 #include "jpcr/io/synthetic_sequence.hpp"
 #include "jpcr/io/trajectory_metrics.hpp"
 #include "jpcr/quadric/error.hpp"
+#include "jpcr/quadric/se3.hpp"
 
 namespace jpcr {
 namespace {
@@ -86,6 +87,36 @@ TEST(KeyframePipeline, FramesCarryTheFrontEndsIcpCovariance) {
     EXPECT_TRUE(c.allFinite());
     EXPECT_TRUE((c.diagonal().array() > 0.0).all()) << c.diagonal().transpose();
     EXPECT_TRUE(c.isApprox(c.transpose(), 1e-9));
+  }
+}
+
+// Another gauge moves the whole trajectory rigidly and changes nothing else: every method works
+// on relative motions (invariance under a rigid motion of the world frame).
+TEST(KeyframePipeline, AnInitialPoseMovesTheTrajectoryRigidly) {
+  const SyntheticSequence seq = walk(3);
+  Vector6d xi;
+  xi << 1.5, -0.4, 0.9, 0.3, -1.2, 0.7;
+  const Eigen::Isometry3d gauge = se3_exp(xi);
+  for (PipelineMethod method : {PipelineMethod::kIcpFtf, PipelineMethod::kJointFtf}) {
+    Trajectory t[2];
+    for (int g = 0; g < 2; ++g) {
+      PipelineParams p;
+      p.method = method;
+      p.frontend.threads = 2;
+      if (g == 1) p.initial_pose = gauge;
+      KeyframePipeline pipeline(p);
+      for (std::size_t i = 0; i < seq.size(); ++i)
+        pipeline.add(seq.load(i));
+      pipeline.finish();
+      t[g] = pipeline.trajectory();
+    }
+    ASSERT_EQ(t[1].size(), t[0].size());
+    EXPECT_TRUE(t[1].front().pose.isApprox(gauge, 1e-12));
+    for (std::size_t i = 0; i < t[0].size(); ++i) {
+      const Eigen::Isometry3d moved = gauge * t[0][i].pose;
+      EXPECT_LT((moved.matrix() - t[1][i].pose.matrix()).cwiseAbs().maxCoeff(), 1e-6)
+          << to_string(method) << " frame " << i;
+    }
   }
 }
 
