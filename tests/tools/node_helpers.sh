@@ -29,6 +29,18 @@ wait_bounded() {
   kill -KILL "$pid" 2>/dev/null; wait "$pid" 2>/dev/null; return 124
 }
 
+# Waits up to $2 s for the node, pid $1, and checks that it exited 0 with a line of its output
+# file $3 matching $4; $5 names the case in the message.
+expect_node() {
+  local pid=$1 limit=$2 file=$3 pattern=$4 label=$5 rc
+  wait_bounded "$pid" "$limit"; rc=$?
+  if [ $rc != 0 ] || ! grep -q "$pattern" "$file"; then
+    echo "FAIL: $label: exit $rc"; cat "$file"; fail=1
+  else
+    echo "ok: $label: $(grep -m1 "$pattern" "$file")"
+  fi
+}
+
 # The final TUM block a `jpcr_dds_echo --tum` of a path printed == a trajectory file, to 1e-9.
 same_path() {
   /usr/bin/python3 - "$1" "$2" <<'PY'

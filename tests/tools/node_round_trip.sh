@@ -73,14 +73,10 @@ same_path "$tmp/path.txt" "$tmp/off/trajectory.txt" || { echo "FAIL: node path v
 idle_pid=$!; pids+=($idle_pid)
 expect 0 "published 2 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 --frames 0:2 \
   --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
-wait_bounded $idle_pid 60; rc=$?
-if [ $rc != 0 ] || ! grep -q "processed 2 frames.*stopped by --idle-timeout" "$tmp/idle.txt"; then
-  echo "FAIL: idle timeout: exit $rc"; cat "$tmp/idle.txt"; fail=1
-else
-  echo "ok: $(tail -1 "$tmp/idle.txt")"
-fi
-# keep_history: false, an unattended run: J-full windows of 3 (every frame a keyframe) forget final frames
-# and still publishes every keyframe's map.
+expect_node $idle_pid 60 "$tmp/idle.txt" "processed 2 frames.*stopped by --idle-timeout" \
+  "idle timeout"
+# keep_history: false, an unattended run: J-full windows of 3 (every frame a keyframe) forget
+# each final frame, and every keyframe's map is still published.
 printf 'dds:\n  history_depth: 32\n  image_history_depth: 16\npipeline:\n  keep_history: false\n  window: 3\n' \
   > "$tmp/forget.yaml"
 "$node" --params "$tmp/forget.yaml" --domain $domain --method j-full --max-frames 6 \
@@ -88,20 +84,12 @@ printf 'dds:\n  history_depth: 32\n  image_history_depth: 16\npipeline:\n  keep_
 forget_pid=$!; pids+=($forget_pid)
 expect 0 "published 6 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 \
   --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
-wait_bounded $forget_pid 200; rc=$?
-if [ $rc != 0 ] || ! grep -q "processed 6 frames, 6 keyframes, 6 curvature maps" "$tmp/forget.txt"; then
-  echo "FAIL: keep_history false: exit $rc"; cat "$tmp/forget.txt"; fail=1
-else
-  echo "ok: keep_history false: $(grep processed "$tmp/forget.txt")"
-fi
+expect_node $forget_pid 200 "$tmp/forget.txt" "processed 6 frames, 6 keyframes, 6 curvature maps" \
+  "keep_history false"
 "$node" "${dds[@]}" > "$tmp/term.txt" 2>&1 &
 term_pid=$!; pids+=($term_pid)
-sleep 1.5; kill -TERM $term_pid; wait_bounded $term_pid 20; rc=$?
-if [ $rc != 0 ] || ! grep -q "processed 0 frames.*stopped by signal" "$tmp/term.txt"; then
-  echo "FAIL: SIGTERM: exit $rc"; cat "$tmp/term.txt"; fail=1
-else
-  echo "ok: SIGTERM: $(tail -1 "$tmp/term.txt")"
-fi
+sleep 1.5; kill -TERM $term_pid
+expect_node $term_pid 20 "$tmp/term.txt" "processed 0 frames.*stopped by signal" "SIGTERM"
 
 # Bad command lines and parameters.
 expect 0 "usage: jpcr_node" -- "$node" --help
