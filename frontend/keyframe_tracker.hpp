@@ -35,7 +35,8 @@ struct TrackResult {
   /// Covariance of T_wc as the chain of alignments from the first frame (the gauge: zero)
   /// gives it: ξ of a left update exp(ξ^) T_wc in world axes, (v, ω) as IcpResult::covariance.
   /// Σ = Σ_ref + Ad(T_w,ref) Σ_icp Ad(T_w,ref)ᵀ (first-order, independent alignments); a frame
-  /// that kept the last motion adds the last good alignment's Σ_icp at the previous frame.
+  /// that kept the last motion adds the last good alignment's Σ_icp at the previous frame (1 m
+  /// and 1 rad per axis when no alignment has succeeded yet: the motion is unknown).
   /// position_rotation_covariance (se3.hpp) turns it into ROS's (x, y, z, rx, ry, rz) order.
   Matrix6d pose_covariance = Matrix6d::Zero();
   bool is_keyframe = false;
@@ -75,8 +76,9 @@ class KeyframeTracker {
   std::shared_ptr<const FramePyramid> previous_;
   Eigen::Isometry3d previous_pose_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_good_motion_ = Eigen::Isometry3d::Identity();  // T_prev,cur
-  Matrix6d previous_covariance_ = Matrix6d::Zero();       // the previous frame's pose_covariance
-  Matrix6d last_good_icp_covariance_ = Matrix6d::Zero();  // of the last good alignment
+  Matrix6d previous_covariance_ = Matrix6d::Zero();  // the previous frame's pose_covariance
+  // Of the last good alignment; before the first, 1 m and 1 rad per axis: an unknown motion.
+  Matrix6d last_good_icp_covariance_ = Matrix6d::Identity();
 };
 
 }  // namespace jpcr
