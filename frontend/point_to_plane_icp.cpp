@@ -48,6 +48,8 @@ void describe(const NormalEquations& eq, IcpResult& r) {
   const double dof = std::max(static_cast<double>(eq.inliers) - 6.0, 1.0);
   r.covariance =
       (eq.cost / dof) * eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
+  // No pair at all (0 · ∞ above): nothing is known of the motion, 1 m and 1 rad per axis.
+  if (!r.covariance.allFinite()) r.covariance = Matrix6d::Identity();
 }
 
 // Sums over one image row in single precision (at most a few hundred terms), added to the

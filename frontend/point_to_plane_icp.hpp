@@ -47,7 +47,8 @@ struct IcpResult {
   /// noise; on bilateral-filtered depth (PreprocessParams::bilateral) the residuals' errors are
   /// correlated over the filter window and it understates the spread (2.3–2.9x in sd, measured
   /// with `jpcr_eval noise --method icp-ftf --noise-matched`).
-  /// Eigenvalues below 1e-12 λmax are clamped, so unobserved directions read as huge, not Inf.
+  /// Eigenvalues below 1e-12 λmax are clamped, so unobserved directions read as huge, not Inf;
+  /// without any pair it is the identity (1 m and 1 rad per axis: an unknown motion).
   Matrix6d covariance = Matrix6d::Identity();
   IcpVerdict verdict = IcpVerdict::too_few_points;
 };

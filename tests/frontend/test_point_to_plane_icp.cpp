@@ -162,6 +162,9 @@ TEST(PointToPlaneIcp, EmptyAndNanFramesGiveVerdictsNotCrashes) {
     const IcpResult r = align_point_to_plane(*s, *t, Eigen::Isometry3d::Identity());
     EXPECT_EQ(r.verdict, IcpVerdict::too_few_points);
     EXPECT_TRUE(r.pose.matrix().isIdentity());
+    // Nothing observed: the covariance of an unknown motion, finite (it goes out on DDS).
+    EXPECT_TRUE(r.covariance.allFinite());
+    EXPECT_EQ(r.covariance, Matrix6d::Identity());
   }
 }
 
