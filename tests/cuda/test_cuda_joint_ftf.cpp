@@ -275,7 +275,8 @@ TEST(CudaJointFrameToFrame, ARejectedLoadKeepsTheLoadedPair) {
   EXPECT_THROW(gpu.load(pair.vertices, pair.camera, pattern, poses, QuadricMap(80, 60)),
                std::invalid_argument);
   // Frames of as many pixels but another shape (the kernels would read frame 2 wrongly).
-  const VertexMap transposed(pair.vertices[1].height(), pair.vertices[1].width());
+  const VertexMap transposed(pair.vertices[1].height(), pair.vertices[1].width(),
+                             Eigen::Vector3f::Zero());
   EXPECT_THROW(gpu.load({pair.vertices[0], transposed}, pair.camera, pattern, poses, initial),
                std::invalid_argument);
   const ReducedSystem after = gpu.linearize(params.initial_damping);

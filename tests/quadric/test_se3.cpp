@@ -111,7 +111,9 @@ TEST(Se3, PositionRotationCovarianceMatchesSampledLeftUpdates) {
   for (int i = 0; i < 6; ++i) {
     EXPECT_NEAR(sampled(i, i) / predicted(i, i), 1.0, 0.04) << "axis " << i;
     // Without the lever arm the position's variance would be sigma(i, i), far off at 2 m.
-    if (i < 3) EXPECT_GT(predicted(i, i), 1.5 * sigma(i, i)) << "axis " << i;
+    if (i < 3) {
+      EXPECT_GT(predicted(i, i), 1.5 * sigma(i, i)) << "axis " << i;
+    }
   }
   const Eigen::Matrix<double, 6, 1> d = predicted.diagonal().cwiseSqrt().cwiseInverse();
   EXPECT_LT((d.asDiagonal() * (sampled - predicted) * d.asDiagonal()).cwiseAbs().maxCoeff(), 0.04);
