@@ -14,6 +14,7 @@ void DdsConfig::validate() const {
   if (camera_info_topic.empty()) throw InputError("camera_info_topic: must not be empty");
   if (history_depth < 1) throw InputError("history_depth: must be at least 1");
   if (image_history_depth < 1) throw InputError("image_history_depth: must be at least 1");
+  if (keyframe_queue < 1) throw InputError("keyframe_queue: must be at least 1");
   if (!(max_image_megabytes > 0.0) || max_image_megabytes > 4096.0) {
     throw InputError("max_image_megabytes: must be in (0, 4096] MiB");
   }
@@ -34,6 +35,7 @@ void read_dds_config(YamlSection yaml, DdsConfig& config) {
   yaml.read("camera_frame_id", config.camera_frame_id);
   yaml.read("history_depth", config.history_depth);
   yaml.read("image_history_depth", config.image_history_depth);
+  yaml.read("keyframe_queue", config.keyframe_queue);
   std::string reliability = config.input_reliable ? "reliable" : "best_effort";
   yaml.read_choice("input_reliability", reliability, {"reliable", "best_effort"});
   config.input_reliable = reliability == "reliable";

@@ -16,6 +16,8 @@ struct DdsQos {
   bool transient_local = false;  // TRANSIENT_LOCAL: late joiners get the last `depth` samples
   int depth = 10;                // samples, KEEP_LAST history
   bool keep_all = false;         // KEEP_ALL history instead (depth unused): nothing is overwritten
+  int max_samples = 0;           // a KEEP_ALL reader's resource limit, samples (0: unlimited)
+  int max_blocking_ms = 1000;    // a reliable writer's wait for room before a write times out
 };
 
 struct DdsConfig {
@@ -28,6 +30,7 @@ struct DdsConfig {
   std::string camera_frame_id = "camera_depth_optical_frame";     // odom child, image frames
   int history_depth = 10;             // samples, KEEP_LAST depth of the volatile topics
   int image_history_depth = 2;        // samples, KEEP_LAST depth of image topics (MB each)
+  int keyframe_queue = 32;            // keyframes a split back end holds unread (MB each)
   bool input_reliable = true;         // depth input QoS: reliable (ROS default) or best effort
   double max_image_megabytes = 64.0;  // MiB, larger claimed images are rejected unread
   int max_image_side = 16384;         // pixels, larger claimed width or height is rejected

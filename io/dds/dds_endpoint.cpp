@@ -11,11 +11,13 @@ class Qos {
  public:
   explicit Qos(const DdsQos& q) : qos_(dds_create_qos()) {
     dds_qset_reliability(qos_, q.reliable ? DDS_RELIABILITY_RELIABLE : DDS_RELIABILITY_BEST_EFFORT,
-                         DDS_SECS(1));
+                         DDS_MSECS(q.max_blocking_ms));
     dds_qset_durability(
         qos_, q.transient_local ? DDS_DURABILITY_TRANSIENT_LOCAL : DDS_DURABILITY_VOLATILE);
     if (q.keep_all) {
       dds_qset_history(qos_, DDS_HISTORY_KEEP_ALL, 0);
+      if (q.max_samples > 0)
+        dds_qset_resource_limits(qos_, q.max_samples, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
     } else {
       dds_qset_history(qos_, DDS_HISTORY_KEEP_LAST, q.depth);
     }
@@ -55,6 +57,8 @@ DdsEndpoint::DdsEndpoint(const DdsParticipant& participant, const std::string& t
     : name_(topic), kind_(kind) {
   if (!qos.keep_all && qos.depth < 1)
     throw DdsError("topic " + topic + ": history depth must be at least 1");
+  if (qos.max_samples < 0 || qos.max_blocking_ms < 0)
+    throw DdsError("topic " + topic + ": negative resource limit or blocking time");
   const Qos q(qos);
   topic_ = DdsEntity(
       check_dds(dds_create_topic(participant.handle(), &type, topic.c_str(), nullptr, nullptr),
@@ -105,6 +109,13 @@ bool DdsEndpoint::wait_for_acks(std::chrono::milliseconds timeout) const {
 
 void DdsEndpoint::write_sample(const void* sample) const {
   check_dds(dds_write(endpoint_.get(), sample), "dds_write(" + name_ + ")");
+}
+
+bool DdsEndpoint::try_write_sample(const void* sample) const {
+  const dds_return_t r = dds_write(endpoint_.get(), sample);
+  if (r == DDS_RETCODE_TIMEOUT) return false;
+  check_dds(r, "dds_write(" + name_ + ")");
+  return true;
 }
 
 bool DdsEndpoint::wait_data(std::chrono::nanoseconds timeout) const {

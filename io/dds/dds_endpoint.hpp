@@ -58,6 +58,9 @@ class DdsEndpoint {
 
  protected:
   void write_sample(const void* sample) const;
+  /// false when the write timed out: a reliable reader's resource limit is full (after the QoS's
+  /// max_blocking_ms); the sample was not written and may be written again.
+  bool try_write_sample(const void* sample) const;
   /// Waits for data; true when there is some.
   bool wait_data(std::chrono::nanoseconds timeout) const;
 
@@ -73,6 +76,8 @@ class DdsWriter : public DdsEndpoint {
       : DdsEndpoint(participant, topic, DdsType<Msg>::descriptor(), qos, Kind::kWriter) {}
   /// Publishes a sample; throws DdsError when Cyclone refuses it.
   void write(const Msg& sample) const { write_sample(&sample); }
+  /// write, or false after max_blocking_ms while a reliable reader's resource limit is full.
+  bool try_write(const Msg& sample) const { return try_write_sample(&sample); }
 };
 
 /// Takes every available sample of `reader` and calls on_sample(const Msg&) on each valid one;

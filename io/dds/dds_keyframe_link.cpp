@@ -1,6 +1,7 @@
 #include "jpcr/io/dds/dds_keyframe_link.hpp"
 
 #include <iostream>
+#include <thread>
 
 #include "jpcr/quadric/error.hpp"
 
@@ -14,32 +15,72 @@ DdsQos keyframe_topic_qos() {
   DdsQos qos;
   qos.reliable = true;
   qos.keep_all = true;
+  qos.max_blocking_ms = kKeyframeWriteTry;
+  return qos;
+}
+
+DdsQos keyframe_reader_qos(const DdsConfig& config) {
+  DdsQos qos = keyframe_topic_qos();
+  qos.max_samples = config.keyframe_queue;
   return qos;
 }
 
 DdsKeyframeWriter::DdsKeyframeWriter(const DdsParticipant& participant, const DdsConfig& config)
     : config_(config), writer_(participant, keyframe_topic_name(config), keyframe_topic_qos()) {}
 
-void DdsKeyframeWriter::publish(const Frame& frame, const StampedPose& pose,
+// Each try blocks up to the QoS's max_blocking_time while the back end's queue is full.
+bool DdsKeyframeWriter::write(const RosKeyframe& message, const KeepWaiting& keep_waiting) const {
+  const auto start = std::chrono::steady_clock::now();
+  while (!writer_.try_write(message)) {
+    const double waited =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (keep_waiting && !keep_waiting(waited)) return false;
+  }
+  return true;
+}
+
+bool DdsKeyframeWriter::flush(const KeepWaiting& keep_waiting) const {
+  const auto start = std::chrono::steady_clock::now();
+  while (!writer_.wait_for_acks(std::chrono::milliseconds(kKeyframeWriteTry))) {
+    const double waited =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!keep_waiting(waited)) return false;
+  }
+  return true;
+}
+
+bool DdsKeyframeWriter::wait_until_unmatched(const KeepWaiting& keep_waiting) const {
+  const auto start = std::chrono::steady_clock::now();
+  while (writer_.matched() > 0) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(kKeyframeWriteTry));
+    const double waited =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (!keep_waiting(waited)) return false;
+  }
+  return true;
+}
+
+bool DdsKeyframeWriter::publish(const Frame& frame, const StampedPose& pose,
                                 const Matrix6d& covariance, int frame_index,
-                                const Trajectory& tracked) const {
+                                const Trajectory& tracked, const KeepWaiting& keep_waiting) const {
   // 32FC1 carries the float depth bit for bit; 16UC1 would round it to millimetres.
   const KeyframeMessage message(frame, pose, covariance, DepthEncoding::kMetres32,
                                 config_.world_frame_id, config_.camera_frame_id, frame_index,
                                 tracked);
-  writer_.write(message.message());
+  return write(message.message(), keep_waiting);
 }
 
-void DdsKeyframeWriter::publish_end(int frames, const Trajectory& tracked) const {
+bool DdsKeyframeWriter::publish_end(int frames, const Trajectory& tracked,
+                                    const KeepWaiting& keep_waiting) const {
   const KeyframeMessage message(frames, tracked, config_.world_frame_id);
-  writer_.write(message.message());
+  return write(message.message(), keep_waiting);
 }
 
 DdsKeyframeReader::DdsKeyframeReader(const DdsParticipant& participant, const DdsConfig& config,
                                      std::ostream* log)
     : topic_(keyframe_topic_name(config)),
       log_(log ? log : &std::cerr),
-      reader_(participant, topic_, keyframe_topic_qos()) {
+      reader_(participant, topic_, keyframe_reader_qos(config)) {
   limits_.max_bytes = config.max_image_bytes();
   limits_.max_side = static_cast<std::uint32_t>(config.max_image_side);
 }

@@ -5,13 +5,27 @@
 // process reads them.
 //
 // QoS: reliable, volatile, KEEP_ALL on both sides: a back end busy refining a window loses no
-// keyframe (Cyclone keeps the unread samples; the writer blocks only when the reader stops
-// acknowledging), so the back end sees exactly what the single-process pipeline would.
+// keyframe, so it sees exactly what the single-process pipeline would. Its reader holds at most
+// dds.keyframe_queue unread keyframes (a resource limit, so memory stays bounded when the back
+// end is slower than the front end); when they are all waiting, the reader stops acknowledging
+// and the front end's publish waits until the back end takes one: the front end is then paced by
+// the back end (its camera queue drops frames meanwhile, counted and logged).
+//
+// Cyclone acknowledges a keyframe that arrives at a full queue and holds it for delivery, but
+// only while the writer exists: a front end that exited right after its last write would lose the
+// keyframes still held (measured with a queue of 1). So the front end, once the back ends
+// acknowledged the end of stream, waits until they are gone (wait_until_unmatched): a jpcr back
+// end exits after the end of stream.
+//
+// Run the two in separate processes, as jpcr_node does. In one process Cyclone delivers locally
+// and a write that times out on a full reader is not delivered at all: publish() then writes it
+// again, which a remote reader of the same writer would receive twice.
 #pragma once
 
 #include <chrono>
 #include <cstddef>
 #include <deque>
+#include <functional>
 #include <iosfwd>
 #include <memory>
 #include <optional>
@@ -25,29 +39,47 @@ namespace jpcr {
 
 /// PREFIX + "keyframe".
 std::string keyframe_topic_name(const DdsConfig& config);
-/// Reliable, volatile, keep all.
+/// How long one write waits for room in the back end's queue, ms: keep_waiting's period.
+constexpr int kKeyframeWriteTry = 100;
+
+/// The writer's QoS: reliable, volatile, keep all, writes retried every kKeyframeWriteTry ms.
 DdsQos keyframe_topic_qos();
+/// The reader's: the same, holding at most config.keyframe_queue unread keyframes.
+DdsQos keyframe_reader_qos(const DdsConfig& config);
+
+/// Asked every kKeyframeWriteTry ms while a publish waits for room in the back end's queue, with
+/// the seconds waited so far; false gives the sample up.
+using KeepWaiting = std::function<bool(double waited_s)>;
 
 class DdsKeyframeWriter {
  public:
   DdsKeyframeWriter(const DdsParticipant& participant, const DdsConfig& config);
 
   /// Keyframe `frame_index` with the front end's pose and covariance, after the frames `tracked`
-  /// since the previous keyframe.
-  void publish(const Frame& frame, const StampedPose& pose, const Matrix6d& covariance,
-               int frame_index, const Trajectory& tracked) const;
+  /// since the previous keyframe. While the back end's queue is full it waits, asking
+  /// `keep_waiting` (empty: waits as long as it takes); false when it gave the keyframe up.
+  bool publish(const Frame& frame, const StampedPose& pose, const Matrix6d& covariance,
+               int frame_index, const Trajectory& tracked,
+               const KeepWaiting& keep_waiting = {}) const;
   /// The end-of-stream marker: `frames` tracked in all, `tracked` after the last keyframe.
-  void publish_end(int frames, const Trajectory& tracked) const;
+  bool publish_end(int frames, const Trajectory& tracked,
+                   const KeepWaiting& keep_waiting = {}) const;
 
   /// Back ends matched.
   int matched() const { return writer_.matched(); }
   bool wait_matched(std::chrono::milliseconds timeout) const {
     return writer_.wait_matched(1, timeout);
   }
-  /// Waits until the back ends acknowledged every keyframe (before exiting).
-  bool flush(std::chrono::milliseconds timeout) const { return writer_.wait_for_acks(timeout); }
+  /// Waits until the back ends acknowledged every keyframe (before exiting): a back end
+  /// acknowledges a keyframe once its queue has room for it, so this waits as publish does.
+  bool flush(const KeepWaiting& keep_waiting) const;
+  /// Waits until no reader is matched any more (the back ends finished), asking keep_waiting
+  /// every kKeyframeWriteTry ms; false when it gave up.
+  bool wait_until_unmatched(const KeepWaiting& keep_waiting) const;
 
  private:
+  bool write(const RosKeyframe& message, const KeepWaiting& keep_waiting) const;
+
   DdsConfig config_;
   DdsWriter<RosKeyframe> writer_;
 };

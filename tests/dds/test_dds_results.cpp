@@ -284,6 +284,47 @@ TEST_F(DdsResults, KeyframeLinkDeliversInOrderAndRejectsMalformedKeyframes) {
       << log.str();
 }
 
+// The back end's reader holds at most dds.keyframe_queue unread keyframes: a publish into a full
+// queue waits (asking keep_waiting after each try of kKeyframeWriteTry ms), and once the back end
+// takes them the same keyframe goes through; none is lost or reordered.
+TEST_F(DdsResults, KeyframePublishWaitsWhileTheBackEndsQueueIsFull) {
+  config_.keyframe_queue = 2;
+  DdsKeyframeReader reader(subscriber_side_, config_);
+  const DdsKeyframeWriter writer(publisher_side_, config_);
+  ASSERT_TRUE(writer.wait_matched(kTimeout));
+  Frame frame;
+  frame.camera = CameraIntrinsics{}.resized(16, 12);
+  frame.depth = DepthImage(16, 12, 2.0f);
+  const auto publish = [&](int index, const KeepWaiting& keep_waiting) {
+    frame.timestamp = 1.0 + index;
+    return writer.publish(frame, some_pose(frame.timestamp), Matrix6d::Identity(), index, {},
+                          keep_waiting);
+  };
+  std::vector<double> asked;
+  const auto give_up = [&](double waited) {
+    asked.push_back(waited);
+    return false;
+  };
+  EXPECT_TRUE(publish(0, give_up));
+  EXPECT_TRUE(publish(1, give_up));
+  EXPECT_TRUE(asked.empty());
+  EXPECT_FALSE(publish(2, give_up));  // the queue holds 0 and 1
+  ASSERT_EQ(asked.size(), 1u);
+  EXPECT_GE(asked[0], 0.9 * kKeyframeWriteTry / 1000.0);  // after one try
+  std::vector<int> indices;
+  for (int i = 0; i < 2; ++i) {
+    const std::optional<DecodedKeyframe> k = reader.wait(kTimeout);
+    ASSERT_TRUE(k);
+    indices.push_back(k->frame_index);
+  }
+  EXPECT_TRUE(publish(2, give_up));
+  const std::optional<DecodedKeyframe> k = reader.wait(kTimeout);
+  ASSERT_TRUE(k);
+  indices.push_back(k->frame_index);
+  EXPECT_EQ(indices, (std::vector<int>{0, 1, 2}));
+  EXPECT_FALSE(reader.wait(milliseconds(200)));  // nothing twice
+}
+
 TEST(DdsParticipant, BadDomainIdIsAnError) {
   EXPECT_THROW(DdsParticipant(233), DdsError);
   EXPECT_THROW(DdsParticipant(-1), DdsError);

@@ -264,6 +264,9 @@ TEST(DdsConfig, YamlSectionMapsOntoTheStruct) {
   EXPECT_EQ(parse_params("", "e.yaml").dds.topic_prefix, "rt/jpcr/");
   EXPECT_EQ(input_error_of([] { parse_params("dds:\n  domain_id: 300\n", "p.yaml"); }),
             "p.yaml:2: key 'dds.domain_id': must be in 0..232");
+  EXPECT_EQ(parse_params("dds:\n  keyframe_queue: 3\n", "p.yaml").dds.keyframe_queue, 3);
+  EXPECT_EQ(input_error_of([] { parse_params("dds:\n  keyframe_queue: 0\n", "p.yaml"); }),
+            "p.yaml:2: key 'dds.keyframe_queue': must be at least 1");
   EXPECT_EQ(input_error_of([] {
               parse_params("dds:\n  domian_id: 3\n", "p.yaml");
             }).find("domian_id") != std::string::npos,
@@ -284,6 +287,7 @@ TEST(DdsConfig, DefaultYamlStatesTheBuiltInDefaults) {
   EXPECT_EQ(shipped.camera_frame_id, built_in.camera_frame_id);
   EXPECT_EQ(shipped.history_depth, built_in.history_depth);
   EXPECT_EQ(shipped.image_history_depth, built_in.image_history_depth);
+  EXPECT_EQ(shipped.keyframe_queue, built_in.keyframe_queue);
   EXPECT_EQ(shipped.input_reliable, built_in.input_reliable);
   EXPECT_EQ(shipped.max_image_megabytes, built_in.max_image_megabytes);
   EXPECT_EQ(shipped.max_image_side, built_in.max_image_side);

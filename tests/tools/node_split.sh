@@ -15,6 +15,8 @@ build=$1 src=$2
 source "$src/tests/tools/node_helpers.sh"
 # Deep enough depth and result histories that no frame or path is dropped while the nodes work.
 # A keyframe every 2 cm so that 8 frames of the walk make keyframes and frames between them.
+# A back-end queue of one keyframe, so that the front end waits for the back end when it is
+# ahead (how often depends on timing): no keyframe may be lost either way.
 cat > "$tmp/params.yaml" <<'YAML'
 frontend:
   tracker:
@@ -22,6 +24,7 @@ frontend:
 dds:
   history_depth: 32
   image_history_depth: 16
+  keyframe_queue: 1
 YAML
 dds=(--params "$tmp/params.yaml" --domain $domain)
 method=(--method pipeline --window 2)

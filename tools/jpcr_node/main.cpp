@@ -88,6 +88,18 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
   PipelineFrontEnd front_end(o.pipeline);
   Trajectory tracked;  // the front end's poses of the frames since the last keyframe
   std::size_t sent = 0;
+  // The back end holds dds.keyframe_queue keyframes unread: the front end then waits for it (said
+  // the first time, summed at the end); a stop signal gives the keyframe up.
+  bool waiting = false;
+  std::size_t waits = 0;
+  double waited_total = 0.0;
+  const auto wait_for_back_end = [&](double) {
+    if (!waiting && waits++ == 0)
+      std::cerr << "jpcr_node: the back end holds " << o.dds.keyframe_queue
+                << " keyframes unread (dds.keyframe_queue); waiting for it\n";
+    waiting = true;
+    return !cli::stop_requested();
+  };
   node::Progress progress;
   const node::Outcome outcome = node::receive(
       o.stop, [&](auto slice) { return subscriber.wait_frame(slice); },
@@ -103,17 +115,46 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
           if (sent == 0 && !keyframes.wait_matched(o.backend_wait))
             std::cerr << "jpcr_node: no back end on " << keyframe_topic_name(o.dds)
                       << "; sending the keyframes anyway\n";
-          keyframes.publish(frame, f.front_end, f.icp_covariance, f.index, tracked);
-          tracked.clear();
-          ++sent;
+          waiting = false;
+          const auto start = node::Clock::now();
+          const bool sent_now = keyframes.publish(frame, f.front_end, f.icp_covariance, f.index,
+                                                  tracked, wait_for_back_end);
+          if (waiting) waited_total += node::seconds_since(start);
+          if (sent_now) {
+            tracked.clear();
+            ++sent;
+          } else {  // stopped while waiting: the end of stream carries it as a tracked frame
+            tracked.push_back(f.front_end);
+          }
         }
         progress.frame(f, sent, subscriber);
         return node::Step::kProcessed;
       });
   progress.done();
   std::cerr << "jpcr_node: " << node::rate_summary(outcome, "frames") << '\n';
-  keyframes.publish_end(static_cast<int>(outcome.processed), tracked);
-  const bool flushed = keyframes.flush(o.flush_timeout) && results.flush(o.flush_timeout);
+  // The end of stream, and the back end's acknowledgement of every keyframe, wait as a keyframe
+  // does; after a signal, --flush-timeout at most.
+  const auto wait_to_end = [&](double waited) {
+    return wait_for_back_end(waited) || waited < o.flush_timeout.count() / 1000.0;
+  };
+  waiting = false;
+  const auto start = node::Clock::now();
+  const bool ended =
+      keyframes.publish_end(static_cast<int>(outcome.processed), tracked, wait_to_end);
+  if (!ended) std::cerr << "jpcr_node: the back end took no keyframe; end of stream not sent\n";
+  bool flushed = ended && keyframes.flush(wait_to_end) && results.flush(o.flush_timeout);
+  if (waiting) waited_total += node::seconds_since(start);
+  // Keyframes a back end acknowledged but still holds are lost if we exit now (see
+  // dds_keyframe_link.hpp): wait for the back ends to finish and go.
+  if (ended && keyframes.matched() > 0) {
+    std::cerr << "jpcr_node: waiting for the back end to finish (SIGINT/SIGTERM: stop waiting)\n";
+    flushed = keyframes.wait_until_unmatched([&](double waited) {
+      return !cli::stop_requested() || waited < o.flush_timeout.count() / 1000.0;
+    }) && flushed;
+  }
+  if (waits > 0)
+    std::cerr << "jpcr_node: waited " << waited_total << " s in all for the back end (" << waits
+              << " times)\n";
   if (!flushed) std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
   std::cout << "processed " << outcome.processed << " frames, sent " << sent
             << " keyframes and the end of stream; " << node::input_summary(subscriber)
@@ -209,7 +250,8 @@ int node_main(int argc, char** argv) {
       "(depth, camera, pose, the poses of the frames since the previous keyframe); the back\n"
       "end refines and publishes keyframe_pose, curvature, curvature_color and path, the same\n"
       "trajectory as --role all. Start the back end first; give both the same --params,\n"
-      "--method and --window.\n"
+      "--method and --window. A back end dds.keyframe_queue keyframes behind makes the front\n"
+      "end wait for it; at the end the front end waits for the back end to finish.\n"
       "Stops on SIGINT/SIGTERM, --max-frames, --idle-timeout or (back end) the front end's\n"
       "end of stream: finishes the pipeline, publishes the final path, flushes and exits 0.");
   args.option("role", "all | frontend | backend", "all")
@@ -219,7 +261,10 @@ int node_main(int argc, char** argv) {
       .option("max-frames", "stop after N processed frames (0: no limit; not the back end)", "0")
       .option("idle-timeout",
               "stop when no input arrived for S seconds after the first one (0: never)", "0")
-      .option("flush-timeout", "seconds to wait for the readers' acknowledgements at exit", "5")
+      .option("flush-timeout",
+              "seconds to wait for the readers' acknowledgements at exit (after a signal, also for "
+              "the back end)",
+              "5")
       .option("backend-wait",
               "front end: seconds to wait for a back end before sending the first keyframe", "10");
   cli::add_device_option(args);
