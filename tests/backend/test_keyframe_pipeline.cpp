@@ -65,6 +65,7 @@ TEST(KeyframePipeline, IcpFtfIsTheFrontEndAlone) {
   ASSERT_EQ(r.trajectory.size(), 4u);
   expect_gauge(r);
   EXPECT_TRUE(r.curvature_keyframes.empty());
+  ASSERT_FALSE(r.keyframes.empty());  // the first frame at least
   for (const PipelineKeyframe& k : r.keyframes) {
     EXPECT_FALSE(k.pair.has_value());
     EXPECT_TRUE(k.refined.pose.isApprox(k.front_end.pose, 1e-12));

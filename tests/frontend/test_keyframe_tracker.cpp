@@ -96,6 +96,8 @@ TEST(KeyframeTracker, OverlapIsTheSharedViewNotTheDepthNoise) {
     for (const TrackResult& r : results)
       if (r.index > 0) overlap[noisy].push_back(r.overlap);
   }
+  ASSERT_EQ(overlap[0].size(), 7u);  // frames 1..7, each with an overlap
+  ASSERT_EQ(overlap[1].size(), 7u);
   for (std::size_t i = 0; i < overlap[0].size(); ++i) {
     EXPECT_GT(overlap[0][i], 0.8) << "frame " << i + 1;  // a walk of 7 frames (0.23 s)
     EXPECT_NEAR(overlap[1][i], overlap[0][i], 0.05) << "frame " << i + 1;
