@@ -87,8 +87,9 @@ double rms_curvature_error(const QuadricMap& map, const CurvatureImage& truth,
 
 // Under range noise of 1 % (n₀ and the gate scaled with the range as in Quad IT's noise test),
 // the second frame's independent samples lower the curvature error of frame 1: measured RMS
-// over the pixels valid in both maps, Quad IT 3.61 → J-ftf 3.24 1/m (the pose ends 1.4 mm /
-// 0.035° off; σ is 2–4 cm at these ranges).
+// over the pixels valid in both maps, Quad IT 3.31 → J-ftf 3.19 1/m (2026-12-05; it was 3.61 →
+// 3.24 before later changes to the weights), a margin of 4 %; the pose ends 1.4 mm / 0.037° off
+// (σ is 2–4 cm at these ranges).
 TEST(JointFrameToFrame, LowersTheCurvatureErrorOfQuadItUnderRangeNoise) {
   const JointTestWindow w = render_window(2, 320, "range:1");
   JointParams params;
@@ -292,8 +293,17 @@ TEST(PoseSpread, StepsUseTheCrossCovariance) {
 }
 
 // J-full and Q-full on five noise-free 160x120 frames, each pose perturbed by 2 cm / 2°
-// (alternating directions). Measured worst pose error: J-full 0.055 mm / 0.002°, Q-full (the
-// quadrics keep Quad IT's bias) 0.10 mm / 0.0034°; the bounds leave a factor of about 10.
+// (alternating directions). Measured worst pose error (2026-12-05): J-full 0.031 mm / 0.0010°,
+// Q-full (the quadrics keep Quad IT's bias) 0.122 mm / 0.0040°. The bounds leave a factor of
+// about 3 over each, and J-full's is below Q-full's error: a J-full that stopped refining its
+// quadrics (no back-substitution) would be a Q-full, and fail.
+struct WindowBound {
+  double translation_m, rotation_deg;
+};
+WindowBound window_bound(const std::string& method) {
+  return method == "j-full" ? WindowBound{0.08e-3, 0.003} : WindowBound{0.4e-3, 0.012};
+}
+
 class WindowRefinement : public ::testing::TestWithParam<std::string> {};
 
 TEST_P(WindowRefinement, ConvergesFromPerturbedPosesAndKeepsTheGauge) {
@@ -314,8 +324,8 @@ TEST_P(WindowRefinement, ConvergesFromPerturbedPosesAndKeepsTheGauge) {
     std::printf("%s pose %d: %.3g mm, %.3g deg, sigma_t %.2g mm\n", GetParam().c_str(), j + 1,
                 e.translation * 1e3, e.rotation,
                 1e3 * std::sqrt(r.covariance[j].topLeftCorner<3, 3>().trace()));
-    EXPECT_LT(e.translation, 1e-3);
-    EXPECT_LT(e.rotation, 0.05);
+    EXPECT_LT(e.translation, window_bound(GetParam()).translation_m);
+    EXPECT_LT(e.rotation, window_bound(GetParam()).rotation_deg);
     EXPECT_GT(r.covariance[j].diagonal().minCoeff(), 0.0);
   }
 }

@@ -4,6 +4,8 @@
 // and bad input is refused.
 #include <gtest/gtest.h>
 
+#include <cstdio>
+
 #include "jpcr/backend/keyframe_pipeline.hpp"
 #include "jpcr/io/synthetic_sequence.hpp"
 #include "jpcr/io/trajectory_metrics.hpp"
@@ -133,8 +135,12 @@ TEST(KeyframePipeline, JointFtfBeatsIcpFtfOnANoiseFreeWalk) {
   }
   const RelativeErrors e_icp = compute_relative_errors(gt, icp.trajectory);
   const RelativeErrors e_ftf = compute_relative_errors(gt, ftf.trajectory);
-  EXPECT_LT(e_ftf.translation_rms, e_icp.translation_rms);
-  EXPECT_LT(e_ftf.rotation_rms, e_icp.rotation_rms);
+  std::printf("relative RMS: ICP-ftf %.3g m %.3g rad, J-ftf %.3g m %.3g rad\n",
+              e_icp.translation_rms, e_icp.rotation_rms, e_ftf.translation_rms, e_ftf.rotation_rms);
+  // Measured 2026-12-05: ICP-ftf 8.9e-4 m / 1.2e-3 rad, J-ftf 7.5e-5 m / 4.4e-5 rad (12x and
+  // 28x lower); a quarter leaves a factor of 3 over the translation's.
+  EXPECT_LT(e_ftf.translation_rms, 0.25 * e_icp.translation_rms);
+  EXPECT_LT(e_ftf.rotation_rms, 0.25 * e_icp.rotation_rms);
   // Every keyframe has a curvature map, each exactly once, in order: J-ftf's for every keyframe
   // that starts a pair, Quad IT's for the last.
   EXPECT_EQ(ftf.curvature_keyframes, (std::vector<int>{0, 1, 2, 3}));
