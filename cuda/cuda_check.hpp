@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+struct CUstream_st;  // cudaStream_t is CUstream_st*
+
 namespace jpcr {
 
 /// A failed CUDA call or kernel launch, or a CUDA device that was asked for and is not there.
@@ -17,9 +19,10 @@ class CudaError : public std::runtime_error {
 /// Throws CudaError unless `code` (a cudaError_t) is cudaSuccess.
 void cuda_check(int code, const char* call, const char* file, int line);
 
-/// After a kernel launch: the launch error (cudaGetLastError) and, when synchronous checking is
-/// on, the kernel's own error (cudaDeviceSynchronize).
-void cuda_check_launch(const char* kernel, const char* file, int line);
+/// After a kernel launch on `stream`: the launch error (cudaGetLastError) and, when synchronous
+/// checking is on, the kernel's own error (cudaStreamSynchronize: this stream only, so another
+/// thread's work on the device neither waits nor is blamed).
+void cuda_check_launch(const char* kernel, CUstream_st* stream, const char* file, int line);
 
 /// Synchronous checking: on in debug builds (no NDEBUG) and when JPCR_CUDA_SYNC=1 (the GPU
 /// tests set it), so a faulting kernel is reported at its launch.
@@ -28,4 +31,5 @@ bool cuda_synchronous_checks();
 }  // namespace jpcr
 
 #define JPCR_CUDA_CHECK(expr) ::jpcr::cuda_check(static_cast<int>(expr), #expr, __FILE__, __LINE__)
-#define JPCR_CUDA_CHECK_LAUNCH(kernel) ::jpcr::cuda_check_launch(kernel, __FILE__, __LINE__)
+#define JPCR_CUDA_CHECK_LAUNCH(kernel, stream) \
+  ::jpcr::cuda_check_launch(kernel, stream, __FILE__, __LINE__)

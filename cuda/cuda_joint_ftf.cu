@@ -214,7 +214,7 @@ struct CudaJointSystem::Device : StreamEvents<4> {  // linearize start/end, prop
   DeviceArray<PixelOffset> pattern;
   DeviceArray<Quadricd> quadrics, candidate;
   DeviceArray<unsigned char> valid, active;
-  DeviceArray<double> factors;  // kFactors per pixel, as Scalar (float uses half the bytes)
+  DeviceArray<double> factors;  // kFactors Scalars per pixel, in doubles (factor_doubles)
   DeviceArray<double> partials, totals;
   double host_totals[kSums] = {};
   std::size_t allocations = 0;
@@ -231,11 +231,17 @@ struct CudaJointSystem::Device : StreamEvents<4> {  // linearize start/end, prop
     return static_cast<int>(g.x * g.y);
   }
 
-  void reserve(std::size_t pixels, std::size_t pattern_size, int blocks) {
+  // The doubles that hold kFactors Scalars per pixel: half as many for float.
+  static std::size_t factor_doubles(std::size_t pixels, CudaPrecision precision) {
+    const std::size_t scalar = precision == CudaPrecision::kDouble ? sizeof(double) : sizeof(float);
+    return (kFactors * pixels * scalar + sizeof(double) - 1) / sizeof(double);
+  }
+
+  void reserve(std::size_t pixels, std::size_t pattern_size, int blocks, CudaPrecision precision) {
     allocations +=
         vertices[0].reserve(pixels) + vertices[1].reserve(pixels) + pattern.reserve(pattern_size) +
         quadrics.reserve(pixels) + candidate.reserve(pixels) + valid.reserve(pixels) +
-        active.reserve(pixels) + factors.reserve(kFactors * pixels) +
+        active.reserve(pixels) + factors.reserve(factor_doubles(pixels, precision)) +
         partials.reserve(static_cast<std::size_t>(blocks) * kSums) + totals.reserve(kSums);
   }
 
@@ -258,7 +264,7 @@ struct CudaJointSystem::Device : StreamEvents<4> {  // linearize start/end, prop
   void download_totals(int count) {
     sum_partials<<<count, dim3(kBlockWidth, kBlockHeight), 0, stream>>>(partials.data(), blocks(),
                                                                         count, totals.data());
-    JPCR_CUDA_CHECK_LAUNCH("sum_partials");
+    JPCR_CUDA_CHECK_LAUNCH("sum_partials", stream);
     JPCR_CUDA_CHECK(cudaMemcpyAsync(host_totals, totals.data(), count * sizeof(double),
                                     cudaMemcpyDeviceToHost, stream));
   }
@@ -330,7 +336,7 @@ void CudaJointSystem::copy_to_device(const std::vector<VertexMap>& frames,
   d.height = frames[0].height();
   d.pattern_size = static_cast<int>(pattern.offsets.size());
   d.camera = PinholeProjection{camera.fx, camera.fy, camera.cx, camera.cy};
-  d.reserve(pixels, pattern.offsets.size(), d.blocks());
+  d.reserve(pixels, pattern.offsets.size(), d.blocks(), precision_);
   const cudaStream_t stream = d.stream;
   for (int j = 0; j < 2; ++j)
     JPCR_CUDA_CHECK(
@@ -354,7 +360,7 @@ void CudaJointSystem::launch_linearize(double lambda) {
   linearize_pair<Scalar><<<d.grid(), dim3(kBlockWidth, kBlockHeight), 0, d.stream>>>(
       d.inputs<Scalar>(state_.poses), d.quadrics.data(), d.valid.data(), params_, Scalar(lambda),
       reinterpret_cast<Scalar*>(d.factors.data()), d.active.data(), d.partials.data());
-  JPCR_CUDA_CHECK_LAUNCH("linearize_pair");
+  JPCR_CUDA_CHECK_LAUNCH("linearize_pair", d.stream);
 }
 
 ReducedSystem CudaJointSystem::linearize(double lambda) {
@@ -369,7 +375,7 @@ ReducedSystem CudaJointSystem::linearize(double lambda) {
   }
   d.record(0);
   if (poison_) {
-    poison(d.factors, kFactors * d.pixels(), stream);
+    poison(d.factors, Device::factor_doubles(d.pixels(), precision_), stream);
     poison(d.active, d.pixels(), stream);
     poison(d.partials, static_cast<std::size_t>(d.blocks()) * kSums, stream);
   }
@@ -407,7 +413,7 @@ void CudaJointSystem::launch_step(const Vector6d& pose_step) {
       d.inputs<Scalar>(candidate_poses_), d.quadrics.data(), d.active.data(),
       reinterpret_cast<const Scalar*>(d.factors.data()), params_, step, d.candidate.data(),
       d.partials.data());
-  JPCR_CUDA_CHECK_LAUNCH("step_pair");
+  JPCR_CUDA_CHECK_LAUNCH("step_pair", d.stream);
 }
 
 double CudaJointSystem::propose(const ReducedSystem& /*system*/, double /*lambda*/,

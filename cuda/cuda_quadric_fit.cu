@@ -141,11 +141,11 @@ void launch_quad_it(const NeighbourhoodPattern& pattern, const DeviceArray<Pixel
       p.offsets[k] = pattern.offsets[k];
     p.size = size;
     quad_it_parameter_pattern<Scalar><<<grid, block, 0, stream>>>(p, view, normals, params, out);
-    JPCR_CUDA_CHECK_LAUNCH("quad_it_parameter_pattern");
+    JPCR_CUDA_CHECK_LAUNCH("quad_it_parameter_pattern", stream);
   } else {
     quad_it_global_pattern<Scalar>
         <<<grid, block, 0, stream>>>(global.data(), size, view, normals, params, out);
-    JPCR_CUDA_CHECK_LAUNCH("quad_it_global_pattern");
+    JPCR_CUDA_CHECK_LAUNCH("quad_it_global_pattern", stream);
   }
 }
 
@@ -236,7 +236,7 @@ QuadricMap CudaQuadricFit::fit(const VertexMap& vertices, const NormalMap* norma
   if (normals == nullptr) {
     plane_normals<<<grid_for(view), dim3(kBlockWidth, kBlockHeight), 0, stream>>>(
         view, params_.normals, d.normals.data());
-    JPCR_CUDA_CHECK_LAUNCH("plane_normals");
+    JPCR_CUDA_CHECK_LAUNCH("plane_normals", stream);
   }
   d.record(2);
 

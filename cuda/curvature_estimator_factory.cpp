@@ -1,6 +1,7 @@
 #include "jpcr/cuda/curvature_estimator_factory.hpp"
 
 #if defined(JPCR_HAVE_CUDA)
+#include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/cuda_quadric_fit.hpp"
 #endif
 
@@ -12,7 +13,13 @@ std::unique_ptr<CurvatureEstimator> make_curvature_estimator(ComputeDevice devic
   // Without CUDA, resolve_device never returns kCuda (it throws for a cuda request).
   [[maybe_unused]] const ComputeDevice chosen = resolve_device(device, log);
 #if defined(JPCR_HAVE_CUDA)
-  if (chosen == ComputeDevice::kCuda) return std::make_unique<CudaQuadricFit>(params);
+  if (chosen == ComputeDevice::kCuda) {
+    try {
+      return std::make_unique<CudaQuadricFit>(params);
+    } catch (const CudaError& e) {
+      fall_back_to_cpu_or_rethrow(device, e, log);
+    }
+  }
 #endif
   return std::make_unique<QuadricFit>(params);
 }

@@ -76,6 +76,11 @@ bool cuda_device_available() {
   return query_cuda_device().available;
 }
 
+void fall_back_to_cpu_or_rethrow(ComputeDevice requested, const CudaError& e, std::ostream& log) {
+  if (requested != ComputeDevice::kAuto) throw;
+  log << "jpcr: device auto -> cpu (" << e.what() << ")\n";
+}
+
 ComputeDevice resolve_device(ComputeDevice requested, std::ostream& log) {
   const CudaDeviceInfo& gpu = query_cuda_device();
   ComputeDevice chosen = requested;

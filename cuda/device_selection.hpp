@@ -33,4 +33,13 @@ bool cuda_device_available();
 /// Never returns kAuto. Requesting kCuda without a usable GPU throws CudaError saying why.
 ComputeDevice resolve_device(ComputeDevice requested, std::ostream& log);
 
+class CudaError;
+
+/// Called from a `catch (const CudaError& e)` around building a GPU object (the CUDA context and
+/// stream come first there: a GPU in exclusive-process mode held by another process, out of
+/// memory, an unusable MIG slice): for `requested` kAuto logs
+///   jpcr: device auto -> cpu (<e.what()>)
+/// and returns, so that the caller builds the CPU object; otherwise rethrows.
+void fall_back_to_cpu_or_rethrow(ComputeDevice requested, const CudaError& e, std::ostream& log);
+
 }  // namespace jpcr

@@ -1,6 +1,7 @@
 #include "jpcr/cuda/refiner_factory.hpp"
 
 #if defined(JPCR_HAVE_CUDA)
+#include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/cuda_joint_ftf.hpp"
 #endif
 
@@ -16,7 +17,13 @@ std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams
   // Without CUDA, resolve_device never returns kCuda (it throws for a cuda request).
   [[maybe_unused]] const ComputeDevice chosen = resolve_device(device, log);
 #if defined(JPCR_HAVE_CUDA)
-  if (chosen == ComputeDevice::kCuda) return std::make_unique<CudaJointFrameToFrame>(params);
+  if (chosen == ComputeDevice::kCuda) {
+    try {
+      return std::make_unique<CudaJointFrameToFrame>(params);
+    } catch (const CudaError& e) {
+      fall_back_to_cpu_or_rethrow(device, e, log);
+    }
+  }
 #endif
   return cpu;
 }

@@ -65,6 +65,31 @@ TEST(DeviceSelection, AutoTakesTheGpuWhenThereIsOneAndSaysWhichInOneLine) {
   }
 }
 
+// A GPU object that cannot be built (context or stream creation failed): auto falls back to the
+// CPU with one line, an explicit cuda request keeps the error.
+TEST(DeviceSelection, AutoFallsBackWhenTheGpuObjectCannotBeBuilt) {
+  std::ostringstream log;
+  const CudaError failure("jpcr: CUDA call cudaStreamCreate failed: cudaErrorDevicesUnavailable");
+  try {
+    throw failure;
+  } catch (const CudaError& e) {
+    EXPECT_NO_THROW(fall_back_to_cpu_or_rethrow(ComputeDevice::kAuto, e, log));
+  }
+  EXPECT_EQ(log.str(), std::string("jpcr: device auto -> cpu (") + failure.what() + ")\n");
+  for (const ComputeDevice requested : {ComputeDevice::kCuda, ComputeDevice::kCpu}) {
+    try {
+      try {
+        throw failure;
+      } catch (const CudaError& e) {
+        fall_back_to_cpu_or_rethrow(requested, e, log);
+      }
+      ADD_FAILURE() << "device " << to_string(requested) << " swallowed the error";
+    } catch (const CudaError& e) {
+      EXPECT_STREQ(e.what(), failure.what());
+    }
+  }
+}
+
 TEST(DeviceSelection, CudaWithoutAGpuIsAClearError) {
   std::ostringstream log;
   if (cuda_device_available()) {
