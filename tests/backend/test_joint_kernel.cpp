@@ -1,7 +1,8 @@
 // The per-pixel joint kernel (backend/joint_pixel_kernel.hpp): analytic pose and quadric
 // Jacobians of the frame-j residual against central differences, the Schur-complement step
-// of JointSystem against a dense solve of the full normal equations, and JointSystem's reused
-// buffers against fresh ones.
+// of JointSystem against a dense solve of the full normal equations (and the reduced S⁻¹, which
+// the pose covariance rests on, against the pose block of H⁻¹), Q-full's step against the dense
+// solve of its pose block, and JointSystem's reused buffers against fresh ones.
 #include <algorithm>
 #include <cmath>
 #include <string>
@@ -205,6 +206,8 @@ TEST(JointPixelKernel, FrameTermSumsMatchNumericJacobians) {
 // γ_P), H = Σ w JᵀJ with the LM damping H_ii (1 + λ), solved densely.
 struct DenseStep {
   Eigen::VectorXd poses, quadrics;
+  Eigen::MatrixXd H;  // damped; poses first, then the active quadrics
+  Eigen::VectorXd g;
 };
 
 DenseStep dense_step(const JointTestWindow& w, const JointState& state, const JointTermParams& p,
@@ -263,20 +266,16 @@ DenseStep dense_step(const JointTestWindow& w, const JointState& state, const Jo
   }
   H.diagonal() *= 1.0 + lambda;
   const Eigen::VectorXd x = H.ldlt().solve(-g);
-  return {x.head(np), x.tail(N - np)};
+  return {x.head(np), x.tail(N - np), H, g};
 }
 
-class SchurStep : public ::testing::TestWithParam<int> {};
-
-TEST_P(SchurStep, EqualsTheDenseSolveOfTheFullSystem) {
-  const int M = GetParam();
-  const JointTestWindow w = render_window(M, 320);
-  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
-  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
-  const JointTermParams p = JointParams{}.terms(true);
+// A window's poses 1 cm / 1° off the truth and at most 50 of the reference's quadrics, on a grid
+// 36 px apart (few enough for dense_step's dense H).
+JointState sparse_state(const JointTestWindow& w, const QuadricMap& map) {
   JointState state;
-  for (int j = 0; j < M; ++j)
-    state.poses.push_back(j == 0 ? w.truth[0] : perturbed(w.truth[j], 0.01, 1.0, j));
+  for (std::size_t j = 0; j < w.truth.size(); ++j)
+    state.poses.push_back(j == 0 ? w.truth[0]
+                                 : perturbed(w.truth[j], 0.01, 1.0, static_cast<int>(j)));
   state.quadrics.resize(map.status.size());
   state.valid.assign(map.status.size(), 0);
   int chosen = 0;
@@ -288,6 +287,18 @@ TEST_P(SchurStep, EqualsTheDenseSolveOfTheFullSystem) {
       state.valid[i] = 1;
       ++chosen;
     }
+  return state;
+}
+
+class SchurStep : public ::testing::TestWithParam<int> {};
+
+TEST_P(SchurStep, EqualsTheDenseSolveOfTheFullSystem) {
+  const int M = GetParam();
+  const JointTestWindow w = render_window(M, 320);
+  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  const JointTermParams p = JointParams{}.terms(true);
+  const JointState state = sparse_state(w, map);
   const double lambda = 1e-3;
   // The reference sums (sample by sample, as dense_step): the Schur algebra is then exact.
   const JointSystem system(w.vertices, w.camera, pattern, p, JointSampling::kReference);
@@ -313,9 +324,61 @@ TEST_P(SchurStep, EqualsTheDenseSolveOfTheFullSystem) {
               e_quadric);
   EXPECT_LT(e_pose, 1e-9);
   EXPECT_LT(e_quadric, 1e-9);
+
+  // The pose covariance rests on the undamped reduced S: S⁻¹ must be the pose block of H⁻¹ (the
+  // marginal of the poses with every quadric free), in every direction, not only the step's.
+  const ReducedSystem undamped = system.linearize(state, 0.0);
+  const Eigen::MatrixXd H = dense_step(w, state, p, pattern, 0.0).H;
+  const int np = 6 * (M - 1);
+  Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(H.rows(), np);
+  unit.topRows(np).setIdentity();
+  const Eigen::MatrixXd marginal = H.ldlt().solve(unit).topRows(np);
+  const Eigen::MatrixXd s_inverse = undamped.S.ldlt().solve(Eigen::MatrixXd::Identity(np, np));
+  const double e_cov = (s_inverse - marginal).norm() / marginal.norm();
+  std::printf("M = %d: S^-1 against the pose block of H^-1: relative difference %.2e\n", M, e_cov);
+  EXPECT_LT(e_cov, 1e-9);
 }
 
 INSTANTIATE_TEST_SUITE_P(TwoAndFourPoses, SchurStep, ::testing::Values(2, 4));
+
+// Q-full: the quadrics are fixed, so the full system is the poses' block alone (each pose's A_j
+// with its gradient, the poses uncoupled); the reduced step must be that dense solve, and the
+// candidate must keep every quadric exactly.
+TEST(FixedQuadricStep, EqualsTheDenseSolveOfThePoseBlockAndKeepsTheQuadrics) {
+  const int M = 3;
+  const JointTestWindow w = render_window(M, 320);
+  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  const JointTermParams p = JointParams{}.terms(false);
+  const JointState state = sparse_state(w, map);
+  const double lambda = 1e-3;
+  const JointSystem system(w.vertices, w.camera, pattern, p, JointSampling::kReference);
+  const ReducedSystem lin = system.linearize(state, lambda);
+  ASSERT_GT(lin.active, 20);
+  std::vector<Vector6d> pose_steps;
+  ASSERT_TRUE(JointSystem::solve_poses(lin, lambda, pose_steps));
+  const JointStep step = system.step(state, lin, lambda, pose_steps);
+  const DenseStep dense = dense_step(w, state, p, pattern, lambda);
+  const int np = 6 * (M - 1);
+  const Eigen::VectorXd expected = dense.H.topLeftCorner(np, np).ldlt().solve(-dense.g.head(np));
+  Eigen::VectorXd got(np);
+  for (int j = 0; j + 1 < M; ++j)
+    got.segment<6>(6 * j) = pose_steps[static_cast<std::size_t>(j)];
+  const double e = (got - expected).norm() / expected.norm();
+  std::printf("Q-full, %d quadrics: relative difference of the pose steps %.2e\n", lin.active, e);
+  EXPECT_LT(e, 1e-9);
+  // The poses are uncoupled: no block of H joins two of them.
+  EXPECT_EQ(dense.H.block(0, 6, 6, 6).norm(), 0.0);
+  ASSERT_EQ(step.candidate.quadrics.size(), state.quadrics.size());
+  for (std::size_t i = 0; i < state.valid.size(); ++i) {
+    if (!state.valid[i]) continue;
+    const Quadricd &a = step.candidate.quadrics[i], &b = state.quadrics[i];
+    EXPECT_TRUE(step.quadric_steps[i].isZero(0.0)) << i;
+    EXPECT_TRUE(a.R == b.R && a.center == b.center && a.t_z == b.t_z && a.a == b.a && a.b == b.b &&
+                a.c == b.c)
+        << "quadric " << i << " moved";
+  }
+}
 
 // linearize / step into buffers that hold an earlier, larger system (another state, J-ftf's
 // factors) give what fresh ones give: the factors and active pixels are those of this state only,
