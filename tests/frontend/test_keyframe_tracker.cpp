@@ -153,6 +153,24 @@ TEST(KeyframeTracker, PoseCovarianceAccumulatesAlongTheChainOfAlignments) {
   EXPECT_TRUE(r[4].kept_last_motion);
 }
 
+// A blackout before any alignment succeeded: the frame keeps the (identity) motion, and its pose
+// is as unknown as a motion can be, 1 m / 1 rad per axis carried into world axes, not the zero
+// covariance of the gauge (odom would claim a perfectly known pose).
+TEST(KeyframeTracker, ABlackoutBeforeAnyAlignmentIsAnUnknownMotion) {
+  const SyntheticSequence seq = rail(2);
+  const Eigen::Isometry3d start = seq.ground_truth(0).value();
+  KeyframeTracker tracker(FrontendParams{}, start);
+  const TrackResult first = tracker.track(seq.load(0));
+  Frame blank = seq.load(1);
+  blank.depth = DepthImage(blank.depth.width(), blank.depth.height(), 0.0f);
+  const TrackResult r = tracker.track(blank);
+  EXPECT_EQ(first.pose_covariance, Matrix6d::Zero());
+  EXPECT_TRUE(r.kept_last_motion);
+  EXPECT_TRUE(r.T_wc.pose.isApprox(start, 1e-12));
+  const Matrix6d Ad = se3_adjoint(start);
+  EXPECT_LT((r.pose_covariance - Ad * Ad.transpose()).norm(), 1e-12);
+}
+
 TEST(KeyframeTracker, WrongSizedFrameIsAnInputError) {
   KeyframeTracker tracker;
   Frame f;
