@@ -1,5 +1,5 @@
 // Quad IT and Quad LS on rendered frames: known curvature of spheres, cylinders and planes,
-// invariance under rigid motion, invalid pixels flagged (never 0), and Quad IT beating Quad LS
+// invariance under a rotation of the vertices, invalid pixels flagged (never 0), and Quad IT beating Quad LS
 // under the paper's range noise.
 #include <algorithm>
 #include <cmath>
@@ -109,36 +109,11 @@ TEST(QuadricFit, PlanesOfARoomAreFlatAndNormalsFaceTheCamera) {
   }
 }
 
-// Moving the camera and the scene by one rigid motion G leaves the depth image, and so every
-// curvature, unchanged up to the renderer's float rounding.
-TEST(QuadricFit, CurvatureIsInvariantUnderARigidMotionOfCameraAndScene) {
-  const CameraIntrinsics camera = synthetic_camera(320, 240);
-  const Eigen::Isometry3d G = se3_exp((Vector6d() << 0.7, -1.3, 0.4, 0.3, -0.5, 1.1).finished());
-  const Sphere ball{{0, 0, 1.0}, 0.3};
-  const Plane floor{{0, 0, 0}, Eigen::Vector3d::UnitZ()};
-  SyntheticScene scene, moved;
-  scene.surfaces = {floor, ball};
-  moved.surfaces = {Plane{G * floor.point, G.linear() * floor.normal},
-                    Sphere{G * ball.center, ball.radius}};
-  const Eigen::Isometry3d pose = look_from({0.2, -1.4, 1.3}, {0, 0, 0.8});
-  const QuadricFit fit;
-  const Fitted a = fit_scene(scene, camera, pose, fit);
-  const Fitted b = fit_scene(moved, camera, G * pose, fit);
-  int compared = 0;
-  for (int v = 0; v < camera.height; ++v) {
-    for (int u = 0; u < camera.width; ++u) {
-      ASSERT_EQ(a.map.valid(u, v), b.map.valid(u, v));
-      if (!a.map.valid(u, v)) continue;
-      EXPECT_NEAR(a.map.curvature(u, v).x(), b.map.curvature(u, v).x(), 1e-2);
-      EXPECT_NEAR(a.map.curvature(u, v).y(), b.map.curvature(u, v).y(), 1e-2);
-      ++compared;
-    }
-  }
-  EXPECT_GT(compared, camera.width * camera.height / 2);
-}
-
 // Rotating every vertex about the camera centre changes the local frames' gauge (e_x) but not the
-// surface, so κ₁, κ₂ stay; the LM damping on the diagonal is the only non-invariant term.
+// surface, so κ₁, κ₂ stay; the LM damping on the diagonal is the only non-invariant term, with
+// float rounding. Measured worst difference 2.3e-4 1/m over 53135 pixels (2026-12-05); bound
+// 2e-3. (Moving scene and camera together leaves the depth image itself unchanged: that is the
+// renderer's invariance, SyntheticRender.InvariantUnderARigidMotionOfSceneAndCamera.)
 TEST(QuadricFit, CurvatureIsInvariantUnderARotationOfTheVertices) {
   const CameraIntrinsics camera = synthetic_camera(320, 240);
   const QuadricFit fit;
@@ -155,11 +130,15 @@ TEST(QuadricFit, CurvatureIsInvariantUnderARotationOfTheVertices) {
   const auto walls = interior_pixels(f, 0, pattern, true);
   pixels.insert(pixels.end(), walls.begin(), walls.end());
   ASSERT_GT(pixels.size(), 20000u);
+  float worst = 0.0f;
   for (const auto& [u, v] : pixels) {
     ASSERT_TRUE(a.valid(u, v) && b.valid(u, v));
     EXPECT_NEAR(a.curvature(u, v).x(), b.curvature(u, v).x(), 2e-3);
     EXPECT_NEAR(a.curvature(u, v).y(), b.curvature(u, v).y(), 2e-3);
+    worst = std::max(worst, (a.curvature(u, v) - b.curvature(u, v)).cwiseAbs().maxCoeff());
   }
+  std::printf("rotated vertices: worst curvature difference %.2e 1/m over %zu pixels\n", worst,
+              pixels.size());
 }
 
 TEST(QuadricFit, MinSamplesAboveThePatternIsRefused) {
