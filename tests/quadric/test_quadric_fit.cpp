@@ -1,6 +1,6 @@
 // Quad IT and Quad LS on rendered frames: known curvature of spheres, cylinders and planes,
-// invariance under a rotation of the vertices, invalid pixels flagged (never 0), and Quad IT beating Quad LS
-// under the paper's range noise.
+// invariance under a rotation of the vertices, invalid pixels flagged (never 0), and Quad IT
+// beating Quad LS under the paper's range noise.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
