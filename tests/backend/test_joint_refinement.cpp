@@ -109,6 +109,45 @@ TEST(JointFrameToFrame, LowersTheCurvatureErrorOfQuadItUnderRangeNoise) {
   EXPECT_LT(after, before);
 }
 
+// J-full over a window of four frames under the same noise: three other frames' samples lower
+// frame 1's curvature error further than J-ftf's one (method.md §7; the report's J-full column).
+// Measured (2026-12-05): Quad IT 3.31, J-ftf on frames 1-2 3.19, J-full 3.01 1/m. Q-full keeps
+// Quad IT's map exactly.
+TEST(JointWindowRefinement, LowersTheCurvatureErrorOfQuadItUnderRangeNoise) {
+  const JointTestWindow w = render_window(4, 320, "range:1");
+  JointParams params;
+  params.quadric.fit.fair_n0_per_range = params.quadric.fit.gate_per_range = 0.03f;
+  const QuadricMap initial = QuadricFit(params.quadric).estimate(w.vertices[0]);
+  std::vector<Eigen::Isometry3d> start = {w.truth[0]};
+  for (int j = 1; j < 4; ++j)
+    start.push_back(perturbed(w.truth[j], 0.01, 1.0, j));
+  const RefinementResult full = JointWindow(params).refine(w.vertices, w.camera, start, initial);
+  const RefinementResult fixed =
+      FixedQuadricAlignment(params).refine(w.vertices, w.camera, start, initial);
+  const RefinementResult pair = JointFrameToFrame(params).refine(
+      {w.vertices[0], w.vertices[1]}, w.camera, {start[0], start[1]}, initial);
+  const CurvatureImage& truth = w.frames[0].curvature;
+  const double before = rms_curvature_error(initial, truth, full.quadrics);
+  const double after = rms_curvature_error(full.quadrics, truth, initial);
+  const double ftf = rms_curvature_error(pair.quadrics, truth, full.quadrics);
+  const double full_on_both = rms_curvature_error(full.quadrics, truth, pair.quadrics);
+  std::printf(
+      "range:1, 4 frames: curvature RMS Quad IT %.4f, J-full %.4f 1/m; J-ftf %.4f against "
+      "J-full %.4f\n",
+      before, after, ftf, full_on_both);
+  EXPECT_NE(full.report.verdict, RefinementVerdict::kDiverged);
+  EXPECT_LT(after, before);
+  EXPECT_LT(full_on_both, ftf);
+  EXPECT_EQ(fixed.quadrics.quadrics.size(), initial.quadrics.size());
+  for (std::size_t i = 0; i < initial.status.size(); ++i) {
+    ASSERT_EQ(fixed.quadrics.status[i], initial.status[i]) << i;
+    if (initial.status[i] == QuadricStatus::kValid) {
+      ASSERT_EQ(fixed.quadrics.quadrics[i].center, initial.quadrics[i].center) << i;
+      ASSERT_EQ(fixed.quadrics.quadrics[i].a, initial.quadrics[i].a) << i;
+    }
+  }
+}
+
 // Range noise lies along the rays. With the other frame's lever arms at its noisy samples they
 // move with the error that makes the residual, which biases J-ftf along the weakly observed
 // coupling of camera rotation and translation; JointParams::ray_min_cosine > 0 takes them at the
