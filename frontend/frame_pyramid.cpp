@@ -89,6 +89,34 @@ DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& p, 
   return out;
 }
 
+double filtered_noise_inflation(const FramePyramid& pyramid, int stride) {
+  const int r = pyramid.filter_radius, n = 2 * r + 1;
+  if (r <= 0 || stride < 1) return 1.0;
+  const double s2 = double(pyramid.filter_sigma_space) * pyramid.filter_sigma_space;
+  std::vector<double> w(static_cast<std::size_t>(n) * n);
+  for (int dv = -r; dv <= r; ++dv)
+    for (int du = -r; du <= r; ++du)
+      w[static_cast<std::size_t>((dv + r) * n + du + r)] =
+          std::exp(-(du * du + dv * dv) / (2 * s2));
+  // A(k) = Σ_x w(x) w(x + k) over the kernel's support; the lattice offsets within ±2r.
+  const auto autocorrelation = [&](int ku, int kv) {
+    double a = 0.0;
+    for (int v = 0; v < n; ++v)
+      for (int u = 0; u < n; ++u) {
+        const int u2 = u + ku, v2 = v + kv;
+        if (u2 >= 0 && u2 < n && v2 >= 0 && v2 < n)
+          a += w[static_cast<std::size_t>(v * n + u)] * w[static_cast<std::size_t>(v2 * n + u2)];
+      }
+    return a;
+  };
+  const int reach = (2 * r / stride) * stride;
+  double sum = 0.0;
+  for (int kv = -reach; kv <= reach; kv += stride)
+    for (int ku = -reach; ku <= reach; ku += stride)
+      sum += autocorrelation(ku, kv);
+  return sum / autocorrelation(0, 0);
+}
+
 DepthImage downsample_depth(const DepthImage& depth, float max_depth_step, RowPool* pool) {
   DepthImage out(depth.width() / 2, depth.height() / 2, 0.0f);
   for_rows(pool, out.height(), kChunkRows, [&](int begin, int end, int) {
@@ -180,6 +208,8 @@ FramePyramid preprocess(const Frame& frame, const PreprocessParams& params, RowP
     level.valid_vertices =
         clean_and_backproject(input, level.camera, params, level.depth, level.vertices, pool);
     if (l == 0 && params.bilateral) {
+      pyramid.filter_radius = params.bilateral_radius;
+      pyramid.filter_sigma_space = params.bilateral_sigma_space;
       const DepthImage filtered = bilateral_filter(level.depth, params, pool);
       level.valid_vertices =
           clean_and_backproject(filtered, level.camera, params, level.depth, level.vertices, pool);

@@ -28,7 +28,18 @@ struct FramePyramid {
   static constexpr int kLevels = 3;
   double timestamp = 0.0;
   std::vector<PyramidLevel> levels;  // levels[0] is full resolution, each next one half the size
+  int filter_radius = 0;             // px, the bilateral filter of level 0's depth (0: none)
+  float filter_sigma_space = 0.0f;   // px
 };
+
+/// How much more the sum of a residual over every `stride`-th pixel (in u and v) of level 0
+/// varies than it would over independent samples, when the depth went through the bilateral
+/// filter: each raw sample is shared by the filtered pixels around it. For a smooth Jacobian the
+/// variance of a least-squares estimate grows by Σ_k ρ(k) over the lattice offsets k ∈ stride·Z²
+/// (ρ: the normalised autocorrelation of the filter's spatial kernel), so σ²(JᵀWJ)⁻¹ from the
+/// filtered residuals understates it by that factor. The range weights only narrow the kernel:
+/// this is an upper bound. 1 without a filter.
+double filtered_noise_inflation(const FramePyramid& pyramid, int stride);
 
 /// The normal map that serves `level`: its own, or when it has none the next coarser level's,
 /// read at (u >> shift, v >> shift). The coarser level has ⌊w/2⌋ x ⌊h/2⌋ pixels, so the last

@@ -214,6 +214,7 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
 
   Eigen::Isometry3d T = initial;
   NormalEquations last;
+  int last_stride = 1;
   bool have_system = false;
   for (int l = coarsest; l >= 0; --l) {
     const int iterations = params.iterations[l];
@@ -226,6 +227,7 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
       const NormalEquations eq =
           linearize_point_to_plane(source, target, l, T, params, stride, pool);
       last = eq;
+      last_stride = stride;
       have_system = true;
       if (static_cast<double>(eq.inliers) < needed) {
         describe(eq, result);
@@ -253,7 +255,14 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
       }
     }
   }
-  if (have_system) describe(last, result);
+  if (have_system) {
+    describe(last, result);
+    // Filtered depth: the residuals' errors are shared between neighbouring pixels (both
+    // frames' noise enters each residual; each frame's filter counts for its half).
+    if (last.inliers > 0)
+      result.covariance *= 0.5 * (filtered_noise_inflation(source, last_stride) +
+                                  filtered_noise_inflation(target, last_stride));
+  }
   result.pose = T;
   const Eigen::Isometry3d motion = initial.inverse() * T;
   if (!is_finite(T) || motion.translation().norm() > params.max_translation ||

@@ -43,10 +43,11 @@ struct IcpResult {
   /// about 4e-3 (README, "Known limit").
   double degeneracy = 0.0;
   /// σ² (JᵀWJ)⁻¹ for ξ in the target frame (left perturbation), σ² = Σ w e² / (n − 6) over the n
-  /// final pairs: the variance of a unit-weight residual. It describes independent range
-  /// noise; on bilateral-filtered depth (PreprocessParams::bilateral) the residuals' errors are
-  /// correlated over the filter window and it understates the spread (2.3–2.9x in sd, measured
-  /// with `jpcr_eval noise --method icp-ftf --noise-matched`).
+  /// final pairs: the variance of a unit-weight residual. On bilateral-filtered depth
+  /// (PreprocessParams::bilateral) the residuals' errors are shared between neighbouring pixels,
+  /// and it is multiplied by filtered_noise_inflation (frame_pyramid.hpp; 5.0 for the default
+  /// filter at stride 2). `jpcr_eval noise --method icp-ftf --noise-matched` measures the spread
+  /// 1.0–1.3x the prediction in translation, 1.0–1.1x in rotation (it was 2.3–2.9x without).
   /// Eigenvalues below 1e-12 λmax are clamped, so unobserved directions read as huge, not Inf;
   /// without any pair it is the identity (1 m and 1 rad per axis: an unknown motion).
   Matrix6d covariance = Matrix6d::Identity();
