@@ -290,24 +290,49 @@ JointState sparse_state(const JointTestWindow& w, const QuadricMap& map) {
   return state;
 }
 
+// A window of M frames with sparse_state's quadrics: its reduced system and step at λ = 1e-3 from
+// the reference sums (sample by sample, as dense_step: the Schur algebra is then exact), and the
+// dense solve of the same system. estimate_quadrics = false is Q-full.
+struct SmallWindowStep {
+  SmallWindowStep(int frames, bool estimate_quadrics)
+      : M(frames),
+        w(render_window(M, 320)),
+        map(QuadricFit().estimate(w.vertices[0])),
+        pattern(QuadricParams{}.pattern.for_width(w.camera.width)),
+        p(JointParams{}.terms(estimate_quadrics)),
+        state(sparse_state(w, map)),
+        system(w.vertices, w.camera, pattern, p, JointSampling::kReference),
+        lin(system.linearize(state, lambda)) {
+    solved = JointSystem::solve_poses(lin, lambda, pose_steps);
+    if (solved) step = system.step(state, lin, lambda, pose_steps);
+    dense = dense_step(w, state, p, pattern, lambda);
+  }
+  const int M;
+  const double lambda = 1e-3;
+  const JointTestWindow w;
+  const QuadricMap map;
+  const NeighbourhoodPattern pattern;
+  const JointTermParams p;
+  const JointState state;
+  const JointSystem system;
+  const ReducedSystem lin;
+  std::vector<Vector6d> pose_steps;
+  bool solved = false;
+  JointStep step;
+  DenseStep dense;
+};
+
 class SchurStep : public ::testing::TestWithParam<int> {};
 
 TEST_P(SchurStep, EqualsTheDenseSolveOfTheFullSystem) {
-  const int M = GetParam();
-  const JointTestWindow w = render_window(M, 320);
-  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
-  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
-  const JointTermParams p = JointParams{}.terms(true);
-  const JointState state = sparse_state(w, map);
-  const double lambda = 1e-3;
-  // The reference sums (sample by sample, as dense_step): the Schur algebra is then exact.
-  const JointSystem system(w.vertices, w.camera, pattern, p, JointSampling::kReference);
-  const ReducedSystem lin = system.linearize(state, lambda);
-  ASSERT_GT(lin.active, 20);
-  std::vector<Vector6d> pose_steps;
-  ASSERT_TRUE(JointSystem::solve_poses(lin, lambda, pose_steps));
-  const JointStep step = system.step(state, lin, lambda, pose_steps);
-  const DenseStep dense = dense_step(w, state, p, pattern, lambda);
+  const SmallWindowStep t(GetParam(), true);
+  const int M = t.M;
+  const JointState& state = t.state;
+  ASSERT_GT(t.lin.active, 20);
+  ASSERT_TRUE(t.solved);
+  const std::vector<Vector6d>& pose_steps = t.pose_steps;
+  const JointStep& step = t.step;
+  const DenseStep& dense = t.dense;
 
   Eigen::VectorXd schur_poses(6 * (M - 1));
   for (int j = 0; j + 1 < M; ++j)
@@ -327,8 +352,8 @@ TEST_P(SchurStep, EqualsTheDenseSolveOfTheFullSystem) {
 
   // The pose covariance rests on the undamped reduced S: S⁻¹ must be the pose block of H⁻¹ (the
   // marginal of the poses with every quadric free), in every direction, not only the step's.
-  const ReducedSystem undamped = system.linearize(state, 0.0);
-  const Eigen::MatrixXd H = dense_step(w, state, p, pattern, 0.0).H;
+  const ReducedSystem undamped = t.system.linearize(state, 0.0);
+  const Eigen::MatrixXd H = dense_step(t.w, state, t.p, t.pattern, 0.0).H;
   const int np = 6 * (M - 1);
   Eigen::MatrixXd unit = Eigen::MatrixXd::Zero(H.rows(), np);
   unit.topRows(np).setIdentity();
@@ -345,20 +370,15 @@ INSTANTIATE_TEST_SUITE_P(TwoAndFourPoses, SchurStep, ::testing::Values(2, 4));
 // with its gradient, the poses uncoupled); the reduced step must be that dense solve, and the
 // candidate must keep every quadric exactly.
 TEST(FixedQuadricStep, EqualsTheDenseSolveOfThePoseBlockAndKeepsTheQuadrics) {
-  const int M = 3;
-  const JointTestWindow w = render_window(M, 320);
-  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
-  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
-  const JointTermParams p = JointParams{}.terms(false);
-  const JointState state = sparse_state(w, map);
-  const double lambda = 1e-3;
-  const JointSystem system(w.vertices, w.camera, pattern, p, JointSampling::kReference);
-  const ReducedSystem lin = system.linearize(state, lambda);
+  const SmallWindowStep t(3, false);
+  const int M = t.M;
+  const JointState& state = t.state;
+  const ReducedSystem& lin = t.lin;
   ASSERT_GT(lin.active, 20);
-  std::vector<Vector6d> pose_steps;
-  ASSERT_TRUE(JointSystem::solve_poses(lin, lambda, pose_steps));
-  const JointStep step = system.step(state, lin, lambda, pose_steps);
-  const DenseStep dense = dense_step(w, state, p, pattern, lambda);
+  ASSERT_TRUE(t.solved);
+  const std::vector<Vector6d>& pose_steps = t.pose_steps;
+  const JointStep& step = t.step;
+  const DenseStep& dense = t.dense;
   const int np = 6 * (M - 1);
   const Eigen::VectorXd expected = dense.H.topLeftCorner(np, np).ldlt().solve(-dense.g.head(np));
   Eigen::VectorXd got(np);

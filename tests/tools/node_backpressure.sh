@@ -12,16 +12,8 @@ set -uo pipefail
 build=$1 src=$2
 # shellcheck source=node_helpers.sh
 source "$src/tests/tools/node_helpers.sh"
-# A keyframe every 1 cm: every frame of the walk is one. Deep input queues: no frame dropped.
-cat > "$tmp/params.yaml" <<'YAML'
-frontend:
-  tracker:
-    keyframe_translation: 0.01
-dds:
-  history_depth: 64
-  image_history_depth: 16
-  keyframe_queue: 1
-YAML
+# A keyframe every 1 cm: every frame of the walk is one.
+split_params 0.01
 dds=(--params "$tmp/params.yaml" --domain $domain)
 frames=10
 expect 0 "wrote $frames frames" -- "$synth" --scene room_spheres --frames $frames --size 320x240 \

@@ -19,6 +19,15 @@ source "$src/tests/tools/expect.sh"
 export CYCLONEDDS_URI="file://$src/configs/cyclonedds_loopback.xml"
 domain=$(( $$ % 200 + 11 ))
 
+# The split deployment's parameters into $tmp/params.yaml: a keyframe every $1 m, deep input and
+# result histories (no frame or path dropped while the nodes work), a back-end queue of one
+# keyframe (the front end waits for the back end whenever it is ahead).
+split_params() {
+  printf 'frontend:\n  tracker:\n    keyframe_translation: %s\n' "$1" > "$tmp/params.yaml"
+  printf 'dds:\n  history_depth: 64\n  image_history_depth: 16\n  keyframe_queue: 1\n' \
+    >> "$tmp/params.yaml"
+}
+
 # Waits up to $2 s for pid $1 and returns its exit code (124 after killing it on timeout).
 wait_bounded() {
   local pid=$1 limit=$2 i

@@ -13,19 +13,10 @@ set -uo pipefail
 build=$1 src=$2
 # shellcheck source=node_helpers.sh
 source "$src/tests/tools/node_helpers.sh"
-# Deep enough depth and result histories that no frame or path is dropped while the nodes work.
-# A keyframe every 2 cm so that 8 frames of the walk make keyframes and frames between them.
-# A back-end queue of one keyframe, so that the front end waits for the back end when it is
-# ahead (how often depends on timing): no keyframe may be lost either way.
-cat > "$tmp/params.yaml" <<'YAML'
-frontend:
-  tracker:
-    keyframe_translation: 0.02
-dds:
-  history_depth: 32
-  image_history_depth: 16
-  keyframe_queue: 1
-YAML
+# A keyframe every 2 cm so that 8 frames of the walk make keyframes and frames between them. The
+# back-end queue of one keyframe may make the front end wait (how often depends on timing): no
+# keyframe may be lost either way.
+split_params 0.02
 dds=(--params "$tmp/params.yaml" --domain $domain)
 method=(--method pipeline --window 2)
 frames=8
