@@ -50,7 +50,11 @@ struct RefinementReport {
   std::string error;               // kError: what the refiner threw; empty otherwise
   int iterations = 0;              // accepted steps
   int rejected_steps = 0;          // steps that raised the cost (then damped and retried)
-  std::vector<double> cost;        // Σ w r² (m²) at the start and after each accepted step;
+  std::vector<double> cost;        // Σ w r² (m²) at the start and after each accepted step,
+                                   // each over its own linearisation's active quadrics and
+                                   // samples, so a value can exceed the one before (the step
+                                   // test compares the candidate's cost over the previous
+                                   // linearisation's quadrics with that linearisation's);
                                    // icp-bundle: Σ ρ(e²) at the start and after each solve
   int active_quadrics = 0;         // quadrics taking part at the end
   std::vector<int> seen;           // per pose T_2 … T_M: active quadrics that frame sees;
