@@ -141,7 +141,9 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
   const auto start = node::Clock::now();
   const bool ended =
       keyframes.publish_end(static_cast<int>(outcome.processed), tracked, wait_to_end);
-  if (!ended) std::cerr << "jpcr_node: the back end took no keyframe; end of stream not sent\n";
+  if (!ended)
+    std::cerr << "jpcr_node: the back end took no keyframe within --flush-timeout after the signal;"
+                 " end of stream not sent\n";
   bool flushed = ended && keyframes.flush(wait_to_end) && results.flush(o.flush_timeout);
   if (waiting) waited_total += node::seconds_since(start);
   // Keyframes a back end acknowledged but still holds are lost if we exit now (see
@@ -157,8 +159,10 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
               << " times)\n";
   if (!flushed) std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
   std::cout << "processed " << outcome.processed << " frames, sent " << sent
-            << " keyframes and the end of stream; " << node::input_summary(subscriber)
-            << ", skipped " << outcome.skipped << " frames; stopped by " << outcome.reason << '\n';
+            << (ended ? " keyframes and the end of stream; "
+                      : " keyframes, not the end of stream; ")
+            << node::input_summary(subscriber) << ", skipped " << outcome.skipped
+            << " frames; stopped by " << outcome.reason << '\n';
   return 0;
 }
 
