@@ -1,5 +1,9 @@
 #include "jpcr/cuda/refiner_factory.hpp"
 
+#include <utility>
+
+#include "jpcr/cuda/cpu_fallback_refiner.hpp"
+
 #if defined(JPCR_HAVE_CUDA)
 #include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/cuda_joint_ftf.hpp"
@@ -19,7 +23,8 @@ std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams
 #if defined(JPCR_HAVE_CUDA)
   if (chosen == ComputeDevice::kCuda) {
     try {
-      return std::make_unique<CudaJointFrameToFrame>(params);
+      auto gpu = std::make_unique<CudaJointFrameToFrame>(params);
+      return std::make_unique<CpuFallbackRefiner>(std::move(gpu), std::move(cpu), log);
     } catch (const CudaError& e) {
       fall_back_to_cpu_or_rethrow(device, e, log);
     }

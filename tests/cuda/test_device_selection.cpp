@@ -1,12 +1,18 @@
 // `device: auto | cpu | cuda` (issue 7): parsing, one log line saying which device was chosen,
 // a clear error for cuda without a GPU, and the estimator and refiner the factories build. Runs
 // with and without a GPU; each test checks the branch the machine takes.
+#include <memory>
 #include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 
 #include "jpcr/backend/joint_frame_to_frame.hpp"
 #include "jpcr/backend/joint_window.hpp"
+#include "jpcr/cuda/cpu_fallback_refiner.hpp"
 #include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/curvature_estimator_factory.hpp"
 #include "jpcr/cuda/refiner_factory.hpp"
@@ -88,6 +94,63 @@ TEST(DeviceSelection, AutoFallsBackWhenTheGpuObjectCannotBeBuilt) {
       EXPECT_STREQ(e.what(), failure.what());
     }
   }
+}
+
+// A stand-in refiner: throws `Failure` from refine when told to, else returns a result whose
+// method names it; counts its calls.
+template <typename Failure>
+class StubRefiner final : public Refiner {
+ public:
+  StubRefiner(std::string label, bool fails, int* calls)
+      : label_(std::move(label)), fails_(fails), calls_(calls) {}
+  using Refiner::refine;
+  RefinementResult refine(const std::vector<VertexMap>&, const CameraIntrinsics&,
+                          const std::vector<Eigen::Isometry3d>&, const QuadricMap&) const override {
+    ++*calls_;
+    if (fails_) throw Failure("stub failure");
+    RefinementResult r;
+    r.report.method = label_;
+    return r;
+  }
+  std::string name() const override { return "j-ftf"; }
+  const JointParams& params() const override { return params_; }
+
+ private:
+  std::string label_;
+  bool fails_;
+  int* calls_;
+  JointParams params_;
+};
+
+// A device failure mid-run: that refinement and every later one run on the CPU, said once; the
+// GPU is not tried again. Bad input is not a device failure and passes through.
+TEST(CpuFallbackRefiner, ADeviceFailureMovesTheRefinementsToTheCpu) {
+  std::ostringstream log;
+  int gpu_calls = 0, cpu_calls = 0;
+  const CpuFallbackRefiner refiner(
+      std::make_unique<StubRefiner<CudaError>>("gpu", true, &gpu_calls),
+      std::make_unique<StubRefiner<CudaError>>("cpu", false, &cpu_calls), log);
+  EXPECT_FALSE(refiner.on_cpu());
+  for (int i = 0; i < 3; ++i)
+    EXPECT_EQ(refiner.refine(std::vector<VertexMap>{}, CameraIntrinsics{}, {}, QuadricMap{})
+                  .report.method,
+              "cpu");
+  EXPECT_TRUE(refiner.on_cpu());
+  EXPECT_EQ(gpu_calls, 1);
+  EXPECT_EQ(cpu_calls, 3);
+  EXPECT_EQ(lines(log.str()), 1) << log.str();
+  EXPECT_NE(log.str().find("j-ftf on the GPU failed (stub failure); it runs on the cpu"),
+            std::string::npos)
+      << log.str();
+
+  int bad_calls = 0, unused = 0;
+  const CpuFallbackRefiner strict(
+      std::make_unique<StubRefiner<std::invalid_argument>>("gpu", true, &bad_calls),
+      std::make_unique<StubRefiner<std::invalid_argument>>("cpu", false, &unused), log);
+  EXPECT_THROW(strict.refine(std::vector<VertexMap>{}, CameraIntrinsics{}, {}, QuadricMap{}),
+               std::invalid_argument);
+  EXPECT_FALSE(strict.on_cpu());
+  EXPECT_EQ(unused, 0);
 }
 
 TEST(DeviceSelection, CudaWithoutAGpuIsAClearError) {
