@@ -96,18 +96,18 @@ TEST(DeviceSelection, AutoFallsBackWhenTheGpuObjectCannotBeBuilt) {
   }
 }
 
-// A stand-in refiner: throws `Failure` from refine when told to, else returns a result whose
-// method names it; counts its calls.
+// A test double for a refiner: throws `Failure` from refine when told to, else returns a result
+// whose method names it; counts its calls.
 template <typename Failure>
-class StubRefiner final : public Refiner {
+class ScriptedRefiner final : public Refiner {
  public:
-  StubRefiner(std::string label, bool fails, int* calls)
+  ScriptedRefiner(std::string label, bool fails, int* calls)
       : label_(std::move(label)), fails_(fails), calls_(calls) {}
   using Refiner::refine;
   RefinementResult refine(const std::vector<VertexMap>&, const CameraIntrinsics&,
                           const std::vector<Eigen::Isometry3d>&, const QuadricMap&) const override {
     ++*calls_;
-    if (fails_) throw Failure("stub failure");
+    if (fails_) throw Failure("scripted device failure");
     RefinementResult r;
     r.report.method = label_;
     return r;
@@ -128,8 +128,8 @@ TEST(CpuFallbackRefiner, ADeviceFailureMovesTheRefinementsToTheCpu) {
   std::ostringstream log;
   int gpu_calls = 0, cpu_calls = 0;
   const CpuFallbackRefiner refiner(
-      std::make_unique<StubRefiner<CudaError>>("gpu", true, &gpu_calls),
-      std::make_unique<StubRefiner<CudaError>>("cpu", false, &cpu_calls), log);
+      std::make_unique<ScriptedRefiner<CudaError>>("gpu", true, &gpu_calls),
+      std::make_unique<ScriptedRefiner<CudaError>>("cpu", false, &cpu_calls), log);
   EXPECT_FALSE(refiner.on_cpu());
   for (int i = 0; i < 3; ++i)
     EXPECT_EQ(refiner.refine(std::vector<VertexMap>{}, CameraIntrinsics{}, {}, QuadricMap{})
@@ -139,14 +139,14 @@ TEST(CpuFallbackRefiner, ADeviceFailureMovesTheRefinementsToTheCpu) {
   EXPECT_EQ(gpu_calls, 1);
   EXPECT_EQ(cpu_calls, 3);
   EXPECT_EQ(lines(log.str()), 1) << log.str();
-  EXPECT_NE(log.str().find("j-ftf on the GPU failed (stub failure); it runs on the cpu"),
+  EXPECT_NE(log.str().find("j-ftf on the GPU failed (scripted device failure); it runs on the cpu"),
             std::string::npos)
       << log.str();
 
   int bad_calls = 0, unused = 0;
   const CpuFallbackRefiner strict(
-      std::make_unique<StubRefiner<std::invalid_argument>>("gpu", true, &bad_calls),
-      std::make_unique<StubRefiner<std::invalid_argument>>("cpu", false, &unused), log);
+      std::make_unique<ScriptedRefiner<std::invalid_argument>>("gpu", true, &bad_calls),
+      std::make_unique<ScriptedRefiner<std::invalid_argument>>("cpu", false, &unused), log);
   EXPECT_THROW(strict.refine(std::vector<VertexMap>{}, CameraIntrinsics{}, {}, QuadricMap{}),
                std::invalid_argument);
   EXPECT_FALSE(strict.on_cpu());
