@@ -1,5 +1,6 @@
 #include "jpcr/io/dds/dds_keyframe_link.hpp"
 
+#include <chrono>
 #include <iostream>
 #include <thread>
 
@@ -28,10 +29,14 @@ DdsQos keyframe_reader_qos(const DdsConfig& config) {
 DdsKeyframeWriter::DdsKeyframeWriter(const DdsParticipant& participant, const DdsConfig& config)
     : config_(config), writer_(participant, keyframe_topic_name(config), keyframe_topic_qos()) {}
 
-// Each try blocks up to the QoS's max_blocking_time while the back end's queue is full.
-bool DdsKeyframeWriter::write(const RosKeyframe& message, const KeepWaiting& keep_waiting) const {
+namespace {
+
+// Calls try_once, which blocks for at most one try of kKeyframeWriteTry ms, until it succeeds;
+// between tries asks keep_waiting (empty: waits as long as it takes) with the seconds waited.
+template <class TryOnce>
+bool retry_until(const TryOnce& try_once, const KeepWaiting& keep_waiting) {
   const auto start = std::chrono::steady_clock::now();
-  while (!writer_.try_write(message)) {
+  while (!try_once()) {
     const double waited =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     if (keep_waiting && !keep_waiting(waited)) return false;
@@ -39,25 +44,27 @@ bool DdsKeyframeWriter::write(const RosKeyframe& message, const KeepWaiting& kee
   return true;
 }
 
+}  // namespace
+
+// Each try blocks up to the QoS's max_blocking_time while the back end's queue is full.
+bool DdsKeyframeWriter::write(const RosKeyframe& message, const KeepWaiting& keep_waiting) const {
+  return retry_until([&] { return writer_.try_write(message); }, keep_waiting);
+}
+
 bool DdsKeyframeWriter::flush(const KeepWaiting& keep_waiting) const {
-  const auto start = std::chrono::steady_clock::now();
-  while (!writer_.wait_for_acks(std::chrono::milliseconds(kKeyframeWriteTry))) {
-    const double waited =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!keep_waiting(waited)) return false;
-  }
-  return true;
+  return retry_until(
+      [&] { return writer_.wait_for_acks(std::chrono::milliseconds(kKeyframeWriteTry)); },
+      keep_waiting);
 }
 
 bool DdsKeyframeWriter::wait_until_unmatched(const KeepWaiting& keep_waiting) const {
-  const auto start = std::chrono::steady_clock::now();
-  while (writer_.matched() > 0) {
-    std::this_thread::sleep_for(std::chrono::milliseconds(kKeyframeWriteTry));
-    const double waited =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    if (!keep_waiting(waited)) return false;
-  }
-  return true;
+  return retry_until(
+      [&] {
+        if (writer_.matched() == 0) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(kKeyframeWriteTry));
+        return false;
+      },
+      keep_waiting);
 }
 
 bool DdsKeyframeWriter::publish(const Frame& frame, const StampedPose& pose,
