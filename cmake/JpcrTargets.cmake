@@ -11,9 +11,12 @@ function(jpcr_target_defaults target)
   endif()
 endfunction()
 
-# jpcr_add_library(<name> FOLDER <dir> SOURCES ... [PUBLIC ...] [PRIVATE ...])
+# jpcr_add_library(<name> FOLDER <dir> SOURCES ... [PUBLIC ...] [PRIVATE ...] [INTERNAL ...])
+# INTERNAL names the folder's headers that only its own sources (and the tests) include: they
+# are not installed, so a consumer never sees the CUDA runtime, Ceres, MRPT or yaml-cpp headers
+# they pull in.
 function(jpcr_add_library name)
-  cmake_parse_arguments(ARG "" "FOLDER" "SOURCES;PUBLIC;PRIVATE" ${ARGN})
+  cmake_parse_arguments(ARG "" "FOLDER" "SOURCES;PUBLIC;PRIVATE;INTERNAL" ${ARGN})
   set(target jpcr_${name})
   add_library(${target} ${ARG_SOURCES})
   add_library(jpcr::${name} ALIAS ${target})
@@ -28,9 +31,13 @@ function(jpcr_add_library name)
           ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
           LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR}
           RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR})
+  set(exclude)
+  foreach(header IN LISTS ARG_INTERNAL)
+    list(APPEND exclude PATTERN ${header} EXCLUDE)
+  endforeach()
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${ARG_FOLDER}/
           DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/jpcr/${ARG_FOLDER}
-          FILES_MATCHING PATTERN "*.hpp" PATTERN "*.cuh" PATTERN "*.h")
+          FILES_MATCHING PATTERN "*.hpp" PATTERN "*.cuh" PATTERN "*.h" ${exclude})
 endfunction()
 
 # jpcr_add_tool(<name> SOURCES ... LIBS ...): a command-line program, installed.
