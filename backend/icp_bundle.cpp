@@ -12,6 +12,7 @@
 #include <ceres/solver.h>
 
 #include "jpcr/backend/point_to_plane_cost.hpp"
+#include "jpcr/quadric/se3.hpp"
 
 namespace jpcr {
 
@@ -33,6 +34,10 @@ void check_inputs(const std::vector<VertexMap>& vertices, const CameraIntrinsics
                                 std::to_string(vertices.size()) + " frames");
   if (!poses[0].matrix().isApprox(Eigen::Matrix4d::Identity(), 1e-9))
     throw std::invalid_argument("icp-bundle: the first pose is the gauge and must be I");
+  for (std::size_t j = 1; j < poses.size(); ++j)
+    if (!is_rigid(poses[j]))
+      throw std::invalid_argument("icp-bundle: pose " + std::to_string(j) +
+                                  " is not a rigid motion (finite, R orthonormal, det R = 1)");
 }
 
 // Frames reachable from the reference over the pairs that pass the overlap test (either

@@ -8,6 +8,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
+#include "jpcr/quadric/se3.hpp"
+
 namespace jpcr {
 
 namespace {
@@ -117,6 +119,10 @@ void check_joint_inputs(const std::vector<VertexMap>& vertices, const CameraIntr
                                 " poses for " + std::to_string(vertices.size()) + " frames");
   if (!poses[0].matrix().isApprox(Eigen::Matrix4d::Identity(), 1e-9))
     throw std::invalid_argument("joint refinement: the first pose is the gauge and must be I");
+  for (std::size_t j = 1; j < poses.size(); ++j)
+    if (!is_rigid(poses[j]))
+      throw std::invalid_argument("joint refinement: pose " + std::to_string(j) +
+                                  " is not a rigid motion (finite, R orthonormal, det R = 1)");
   if (quadrics.width() != camera.width || quadrics.height() != camera.height)
     throw std::invalid_argument("joint refinement: the quadric map differs in size from frame 0");
 }

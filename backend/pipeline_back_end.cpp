@@ -99,6 +99,8 @@ PipelineMethod parse_pipeline_method(const std::string& name) {
 void PipelineParams::validate() const {
   if (window < 2 || window > kMaxWindowFrames)
     throw InputError("window: must be in [2, " + std::to_string(kMaxWindowFrames) + "] keyframes");
+  if (!is_rigid(initial_pose))
+    throw InputError("initial_pose: must be a rigid motion (finite, R orthonormal, det R = 1)");
   frontend.validate();
   joint.validate();
   icp_bundle.validate();

@@ -101,6 +101,15 @@ double rotation_angle(const Eigen::Matrix3d& R) {
   return so3_log(R).norm();
 }
 
+bool is_rigid(const Eigen::Isometry3d& T, double tolerance) {
+  const Eigen::Matrix4d& M = T.matrix();
+  if (!M.allFinite()) return false;
+  if (M.row(3) != Eigen::RowVector4d(0, 0, 0, 1)) return false;
+  const Eigen::Matrix3d R = T.linear();
+  return (R.transpose() * R - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff() <= tolerance &&
+         R.determinant() > 0.0;
+}
+
 Eigen::Matrix3d orthonormalize(const Eigen::Matrix3d& R) {
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(R, Eigen::ComputeFullU | Eigen::ComputeFullV);
   Eigen::Matrix3d D = Eigen::Matrix3d::Identity();

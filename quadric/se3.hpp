@@ -39,4 +39,9 @@ double rotation_angle(const Eigen::Matrix3d& R);
 /// Projects a nearly orthonormal matrix back onto SO(3) (drift after many updates).
 Eigen::Matrix3d orthonormalize(const Eigen::Matrix3d& R);
 
+/// Whether T is a rigid motion: finite, |RᵀR − I| ≤ tolerance in every entry, det R > 0, and
+/// the bottom row (0, 0, 0, 1). The refiners refuse other initial poses (a scale or shear in T
+/// would otherwise pass through the residuals as a false motion).
+bool is_rigid(const Eigen::Isometry3d& T, double tolerance = 1e-6);
+
 }  // namespace jpcr

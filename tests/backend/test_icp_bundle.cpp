@@ -87,6 +87,10 @@ TEST(IcpBundle, RejectsBadInputAndParameters) {
   EXPECT_THROW(bundle.refine(w.vertices, w.camera, {w.truth[1], w.truth[1]}),
                std::invalid_argument);  // the gauge must be I
   EXPECT_THROW(bundle.refine(w.vertices, w.camera, {w.truth[0]}), std::invalid_argument);
+  Eigen::Isometry3d scaled = w.truth[1];
+  scaled.linear() *= 2.0;
+  EXPECT_THROW(bundle.refine(w.vertices, w.camera, {w.truth[0], scaled}),
+               std::invalid_argument);  // not a rigid motion
   IcpBundleParams bad;
   bad.min_overlap = 0.0;
   EXPECT_THROW(IcpBundle{bad}, InputError);

@@ -391,6 +391,10 @@ TEST(Refiner, RejectsMismatchedInput) {
   EXPECT_THROW(jftf.refine(w.vertices, w.camera, {w.truth[1], w.truth[1]}, initial),
                std::invalid_argument);  // the gauge must be I
   EXPECT_THROW(jftf.refine(w.vertices, w.camera, {w.truth[0]}, initial), std::invalid_argument);
+  Eigen::Isometry3d scaled = w.truth[1];
+  scaled.linear() *= 2.0;
+  EXPECT_THROW(jftf.refine(w.vertices, w.camera, {w.truth[0], scaled}, initial),
+               std::invalid_argument);  // not a rigid motion
   EXPECT_THROW(jftf.refine({w.vertices[0], w.vertices[1], w.vertices[1]}, w.camera,
                            {w.truth[0], w.truth[1], w.truth[1]}, initial),
                std::invalid_argument);  // J-ftf is two frames

@@ -172,6 +172,9 @@ TEST(KeyframePipeline, RefusesBadInput) {
   PipelineParams p;
   p.window = 1;
   EXPECT_THROW(KeyframePipeline{p}, InputError);
+  PipelineParams scaled;
+  scaled.initial_pose.linear() *= 2.0;  // the gauge must be a rigid motion
+  EXPECT_THROW(KeyframePipeline{scaled}, InputError);
   EXPECT_THROW(parse_pipeline_method("bundle"), InputError);
   KeyframePipeline pipeline;
   const SyntheticSequence seq = walk(1);

@@ -1,5 +1,6 @@
 // Property tests of the SE(3) helpers (Sophus style): exp/log round trips, the adjoint identity,
 // and the small-angle series against the closed forms.
+#include <cmath>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -131,6 +132,32 @@ TEST(Se3, OrthonormalizeRestoresRotation) {
   EXPECT_LT((fixed * fixed.transpose() - Eigen::Matrix3d::Identity()).norm(), 1e-12);
   EXPECT_NEAR(fixed.determinant(), 1.0, 1e-12);
   EXPECT_LT((fixed - R).norm(), 1e-3);
+}
+
+TEST(Se3, IsRigidAcceptsMotionsAndRefusesScaleShearReflectionAndNan) {
+  Vector6d xi;
+  xi << 0.3, -0.2, 1.5, 0.4, -1.1, 2.0;
+  Eigen::Isometry3d T(se3_exp(xi));
+  EXPECT_TRUE(is_rigid(T));
+  EXPECT_TRUE(is_rigid(Eigen::Isometry3d::Identity()));
+  Eigen::Isometry3d scaled = T;
+  scaled.linear() *= 1.001;  // RᵀR off by 2e-3
+  EXPECT_FALSE(is_rigid(scaled));
+  Eigen::Isometry3d sheared = T;
+  sheared.linear()(0, 1) += 1e-4;
+  EXPECT_FALSE(is_rigid(sheared));
+  Eigen::Isometry3d drifted = T;  // what many composed updates leave: inside the tolerance
+  drifted.linear() *= 1.0 + 1e-8;
+  EXPECT_TRUE(is_rigid(drifted));
+  Eigen::Isometry3d mirrored = T;
+  mirrored.linear().col(2) *= -1.0;
+  EXPECT_FALSE(is_rigid(mirrored));
+  Eigen::Isometry3d nan = T;
+  nan.translation().x() = std::nan("");
+  EXPECT_FALSE(is_rigid(nan));
+  Eigen::Isometry3d projective = T;
+  projective.matrix()(3, 0) = 1e-3;
+  EXPECT_FALSE(is_rigid(projective));
 }
 
 }  // namespace
