@@ -1,6 +1,12 @@
 #include "jpcr/io/rawlog_dataset.hpp"
 
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <limits>
 
@@ -43,14 +49,9 @@ CameraIntrinsics camera_of(const CObservation3DRangeScan& scan) {
   return c;
 }
 
-}  // namespace
-
-RawlogDataset::RawlogDataset(const std::string& path, const std::optional<CameraIntrinsics>& camera)
-    : path_(path), scans_(std::make_unique<Scans>()) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": file does not exist");
-  // Read object by object (instead of CRawlog::loadFromRawLogFile, which prints MRPT's stack
-  // traces on bad input): EOF ends the file, any other failure is a corrupt rawlog.
+// Reads object by object (instead of CRawlog::loadFromRawLogFile, which prints MRPT's stack
+// traces on bad input): EOF ends the file, any other failure is a corrupt rawlog.
+void read_scans(const std::string& path, std::vector<CObservation3DRangeScan::Ptr>& out) {
   std::size_t objects = 0;
   try {
     mrpt::io::CFileGZInputStream file(path);
@@ -63,16 +64,62 @@ RawlogDataset::RawlogDataset(const std::string& path, const std::optional<Camera
         break;
       }
       if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(object)) {
-        collect(o, scans_->observations);
+        collect(o, out);
       } else if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(object)) {
         for (const auto& so : *sf)
-          collect(so, scans_->observations);
+          collect(so, out);
       }
     }
   } catch (const std::exception&) {
     throw InputError(path + ": not a readable MRPT rawlog (object " + std::to_string(objects) +
                      " cannot be parsed)");
   }
+}
+
+// MRPT's reader trusts the sizes stored in the file: a corrupt range-image size or point count
+// makes it write where it allocated nothing (SIGSEGV in CObservation3DRangeScan's
+// rangeImage_setSize, measured on a rawlog with one size field changed), which no exception
+// handler can catch. So the file is read once in a child process first; a child that does not
+// come back with "read" or "refused" (a signal, or a sanitizer's report) means a rawlog that
+// MRPT cannot read. The file is then read a second time, here.
+void check_mrpt_survives(const std::string& path) {
+  constexpr int kRead = 0, kRefused = 3;
+  const pid_t child = fork();
+  if (child < 0) return;  // no process to spare: read it here, unguarded
+  if (child == 0) {
+    const int null = open("/dev/null", O_WRONLY);  // MRPT's and a sanitizer's noise
+    if (null >= 0) dup2(null, STDERR_FILENO);
+    int code = kRead;
+    try {
+      std::vector<CObservation3DRangeScan::Ptr> scans;
+      read_scans(path, scans);
+    } catch (...) {
+      code = kRefused;
+    }
+    _exit(code);
+  }
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0) {
+    if (errno != EINTR) return;
+  }
+  if (WIFEXITED(status) && (WEXITSTATUS(status) == kRead || WEXITSTATUS(status) == kRefused))
+    return;  // a refusal is reported by the read here, with its message
+  const std::string how = WIFSIGNALED(status) ? "signal " + std::to_string(WTERMSIG(status))
+                                              : "exit code " + std::to_string(WEXITSTATUS(status));
+  throw InputError(path + ": not a readable MRPT rawlog (MRPT's reader crashed on it, " + how +
+                   ": a corrupt size field)");
+}
+
+}  // namespace
+
+RawlogDataset::RawlogDataset(const std::string& path, const std::optional<CameraIntrinsics>& camera)
+    : path_(path), scans_(std::make_unique<Scans>()) {
+  std::error_code ec;
+  if (!std::filesystem::exists(path, ec)) throw InputError(path + ": file does not exist");
+  if (!std::filesystem::is_regular_file(path, ec))
+    throw InputError(path + ": not a regular file (a rawlog is read twice, so no pipe or device)");
+  check_mrpt_survives(path);
+  read_scans(path, scans_->observations);
   if (scans_->observations.empty()) {
     throw InputError(path + ": the rawlog holds no CObservation3DRangeScan with a range image");
   }

@@ -1,8 +1,12 @@
 // MRPT rawlogs as a third dataset kind: the real sample rawlog of mrpt-common, a round trip of
 // real TUM frames through a rawlog the test writes, and bad input.
+#include <cstdint>
+#include <cstring>
 #include <filesystem>
 
 #include <gtest/gtest.h>
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CFileGZOutputStream.h>
 
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/open_dataset.hpp"
@@ -17,6 +21,21 @@ namespace {
 
 const std::string kSample = "/usr/share/mrpt/datasets/tests_rgbd.rawlog";
 const std::string kFr1 = std::string(JPCR_TEST_DATA_DIR) + "/tum_fr1_xyz_20";
+
+// The uncompressed bytes of a rawlog, and back.
+std::string gunzip(const std::string& path) {
+  mrpt::io::CFileGZInputStream in(path);
+  std::string bytes;
+  char block[4096];
+  for (std::size_t n; (n = in.Read(block, sizeof block)) > 0;)
+    bytes.append(block, n);
+  return bytes;
+}
+
+void gzip(const std::string& path, const std::string& bytes) {
+  mrpt::io::CFileGZOutputStream out(path);
+  out.Write(bytes.data(), bytes.size());
+}
 
 std::string error_of(const std::function<void()>& f) {
   try {
@@ -80,6 +99,22 @@ TEST(RawlogDataset, BadInputNamesTheFile) {
                                std::filesystem::file_size(dir.file("two.rawlog")) / 2);
   EXPECT_NE(error_of([&] { RawlogDataset r(dir.file("two.rawlog")); }).find("not a readable"),
             std::string::npos);
+  // A size field MRPT trusts: the range image's rows and columns (uint32, in that order) set to
+  // 2³¹ − 1. MRPT's reader then dies of SIGSEGV inside its own code (measured), which only the
+  // child-process read turns into an error.
+  frame.depth = DepthImage(23, 17, 1.0f);
+  frame.camera.width = 23;
+  frame.camera.height = 17;
+  write_rawlog(dir.file("sizes.rawlog"), {frame});
+  std::string bytes = gunzip(dir.file("sizes.rawlog"));
+  const std::uint32_t size[2] = {17, 23}, huge[2] = {0x7FFFFFFF, 0x7FFFFFFF};
+  const std::string pattern(reinterpret_cast<const char*>(size), sizeof size);
+  const std::size_t at = bytes.find(pattern);
+  ASSERT_NE(at, std::string::npos) << "no rows, cols pair in the rawlog";
+  std::memcpy(&bytes[at], huge, sizeof huge);
+  gzip(dir.file("sizes.rawlog"), bytes);
+  const std::string crashed = error_of([&] { RawlogDataset r(dir.file("sizes.rawlog")); });
+  EXPECT_NE(crashed.find("sizes.rawlog: not a readable MRPT rawlog"), std::string::npos) << crashed;
   write_rawlog(dir.file("empty.rawlog"), {});
   EXPECT_NE(error_of([&] {
               RawlogDataset r(dir.file("empty.rawlog"));
