@@ -5,6 +5,7 @@
 
 #include <cerrno>
 #include <filesystem>
+#include <iterator>
 #include <system_error>
 
 #include "jpcr/io/atomic_file.hpp"
@@ -15,6 +16,9 @@ namespace jpcr {
 namespace fs = std::filesystem;
 
 namespace {
+
+// Inside the staging directory: the target's entries that commit() replaces, until it is done.
+const char* const kPrevious = ".previous";
 
 // Removes the staging directories `prefix`PID in `parent` whose process no longer exists: those
 // of runs that were killed (SIGKILL, a second Ctrl-C) before they could clean up. A PID that is
@@ -69,22 +73,49 @@ std::string StagedOutput::path(const std::string& name) const {
   return (fs::path(staging_) / name).string();
 }
 
+// All or nothing, by renames on one file system: the target's entries of the layout first move
+// aside into the staging directory, then the staged ones move in. When a rename fails (an
+// immutable or foreign-owned entry, a full directory), the entries moved so far go back, so the
+// target holds the earlier run's outputs, untouched, and the error names the entry.
 void StagedOutput::commit() {
   ensure_directory(target_);
   std::vector<std::string> names = layout_;
   if (names.empty())
     for (const fs::directory_entry& e : fs::directory_iterator(staging_))
-      names.push_back(e.path().filename().string());
+      if (e.path().filename() != kPrevious) names.push_back(e.path().filename().string());
+  const fs::path previous = fs::path(staging_) / kPrevious;
+  ensure_directory(previous.string());
+  std::vector<std::string> moved_aside, moved_in;
+  const auto roll_back = [&] {
+    std::error_code ignored;
+    for (const std::string& name : moved_in)
+      fs::remove_all(fs::path(target_) / name, ignored);
+    for (const std::string& name : moved_aside)
+      fs::rename(previous / name, fs::path(target_) / name, ignored);
+  };
+  std::error_code ec;
+  for (const std::string& name : names) {
+    const fs::path to = fs::path(target_) / name;
+    if (!fs::exists(fs::symlink_status(to, ec))) continue;
+    fs::rename(to, previous / name, ec);
+    if (ec) {
+      roll_back();
+      throw InputError(to.string() + ": cannot replace (" + ec.message() +
+                       "); the earlier outputs in " + target_ + " are kept as they were");
+    }
+    moved_aside.push_back(name);
+  }
   for (const std::string& name : names) {
     const fs::path from = fs::path(staging_) / name, to = fs::path(target_) / name;
-    std::error_code ec;
-    fs::remove_all(to, ec);
-    if (ec) throw InputError(to.string() + ": cannot replace (" + ec.message() + ")");
-    if (!fs::exists(from, ec)) continue;
+    if (!fs::exists(fs::symlink_status(from, ec))) continue;
     fs::rename(from, to, ec);
-    if (ec) throw InputError(to.string() + ": cannot be moved into place (" + ec.message() + ")");
+    if (ec) {
+      roll_back();
+      throw InputError(to.string() + ": cannot be moved into place (" + ec.message() +
+                       "); the earlier outputs in " + target_ + " are kept as they were");
+    }
+    moved_in.push_back(name);
   }
-  std::error_code ec;
   fs::remove_all(staging_, ec);
   committed_ = true;
 }
@@ -102,6 +133,28 @@ void require_output_apart_from(const std::string& target, const std::string& inp
       throw InputError(target + ": the output directory holds a dataset (" + list +
                        "); writing there would replace its files (give another --out)");
   }
+}
+
+void require_output_file_apart_from(const std::string& target, const std::string& input,
+                                    const std::string& option) {
+  std::error_code ec;
+  if (fs::equivalent(target, input, ec))
+    throw InputError(target + ": is " + option + " " + input +
+                     " itself; writing it would destroy the input (give another output file)");
+  if (!fs::is_directory(input, ec)) return;
+  const fs::path inside =
+      fs::weakly_canonical(target, ec).lexically_relative(fs::weakly_canonical(input, ec));
+  if (ec || inside.empty() || *inside.begin() == "..") return;
+  const std::string first = inside.begin()->string();
+  const bool dataset_file =
+      std::distance(inside.begin(), inside.end()) > 1
+          ? (first == "depth" || first == "rgb" || first == "curvature" || first == "normals")
+          : (first == "depth.txt" || first == "rgb.txt" || first == "groundtruth.txt" ||
+             first == "camera.yaml" ||
+             (first.rfind("associations", 0) == 0 && inside.extension() == ".txt"));
+  if (dataset_file)
+    throw InputError(target + ": is a file of the " + option + " dataset " + input +
+                     "; writing it would destroy the input (give another output file)");
 }
 
 }  // namespace jpcr

@@ -35,8 +35,9 @@ class StagedOutput {
   std::string path(const std::string& name) const;
   const std::string& target() const { return target_; }
 
-  /// Moves the staged entries into the target (same file system: renames). Throws InputError
-  /// naming the entry that cannot be replaced.
+  /// Moves the staged entries into the target (same file system: renames), all or nothing:
+  /// when an entry cannot be replaced, the ones already moved go back and the target is left as
+  /// it was. Throws InputError naming that entry.
   void commit();
 
  private:
@@ -51,5 +52,13 @@ class StagedOutput {
 /// dataset. `option` names the input in the message ("--dataset").
 void require_output_apart_from(const std::string& target, const std::string& input,
                                const std::string& option);
+
+/// Throws InputError when writing the file `target` would overwrite an input: `input` itself (a
+/// trajectory, a rawlog; the same file after links and ".."), or, when `input` is a dataset
+/// directory, one of its files (depth.txt, rgb.txt, groundtruth.txt, associations*.txt,
+/// camera.yaml, or anything under depth/, rgb/, curvature/, normals/). Other new files inside
+/// a dataset directory are allowed. `option` names the input in the message ("--gt").
+void require_output_file_apart_from(const std::string& target, const std::string& input,
+                                    const std::string& option);
 
 }  // namespace jpcr

@@ -1,6 +1,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 
@@ -73,6 +74,49 @@ TEST(StagedOutput, CommitReplacesEveryLayoutEntryAndKeepsOtherFiles) {
   EXPECT_EQ(read_file(target + "/maps/new_stamp.npy"), "this run's map");
   EXPECT_FALSE(fs::exists(target + "/ply_left_over.txt"));
   EXPECT_EQ(read_file(target + "/notes.txt"), "the user's");
+}
+
+// Makes the directory `path` impossible to rename: immutable for root (chattr +i), which a
+// permission cannot stop; without write permission otherwise (moving a directory rewrites its
+// ".."). False when neither can be done here (a file system without the attribute).
+bool pin(const std::string& path) {
+  if (::geteuid() == 0) return std::system(("chattr +i '" + path + "' 2>/dev/null").c_str()) == 0;
+  fs::permissions(path, fs::perms::owner_read | fs::perms::owner_exec);
+  return true;
+}
+
+void unpin(const std::string& path) {
+  if (::geteuid() == 0) {
+    [[maybe_unused]] const int ignored = std::system(("chattr -i '" + path + "'").c_str());
+  } else {
+    fs::permissions(path, fs::perms::owner_all);
+  }
+}
+
+TEST(StagedOutput, ACommitThatCannotReplaceAnEntryLeavesTheTargetAsItWas) {
+  test::TempDir dir;
+  const std::string target = dir.file("run");
+  fs::create_directories(target + "/curvature");
+  write(target + "/a_report.json", "an earlier run's report");
+  write(target + "/curvature/old.npy", "an earlier run's map");
+  if (!pin(target + "/curvature")) GTEST_SKIP() << "no immutable attribute on this file system";
+  StagedOutput out(target, {"a_report.json", "curvature"});
+  write(out.path("a_report.json"), "this run's report");
+  fs::create_directories(out.path("curvature"));
+  write(out.path("curvature/new.npy"), "this run's map");
+  // a_report.json moves first; curvature/ cannot, so a_report.json goes back.
+  try {
+    out.commit();
+    unpin(target + "/curvature");
+    FAIL() << "the commit replaced a pinned directory";
+  } catch (const InputError& e) {
+    unpin(target + "/curvature");
+    EXPECT_NE(std::string(e.what()).find(target + "/curvature: cannot replace"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(read_file(target + "/a_report.json"), "an earlier run's report");
+  EXPECT_EQ(read_file(target + "/curvature/old.npy"), "an earlier run's map");
+  EXPECT_FALSE(fs::exists(target + "/curvature/new.npy"));
 }
 
 TEST(StagedOutput, EmptyLayoutMovesWhatWasStaged) {
