@@ -87,6 +87,16 @@ cp -r "$tmp/seq" "$tmp/seq_copy"
 expect 1 "holds a dataset (depth.txt)" -- "$curv" --dataset "$tmp/seq" --out "$tmp/seq_copy"
 cmp -s "$tmp/truth.npy" "$tmp/seq_copy/curvature/0.000000.npy" ||
   { echo "FAIL: the copy's ground truth changed"; fail=1; }
+# OUT = another program's results: jpcr_run would replace jpcr_curvature's maps and leave its
+# summary.json behind, and the other way round.
+expect 1 "holds jpcr_curvature's results (summary.json)" -- "$build/tools/jpcr_run" \
+  --dataset "$tmp/seq" --method icp-ftf --out "$tmp/it"
+[ "$(ls "$tmp/it/curvature" | wc -l)" = 3 ] || { echo "FAIL: it/curvature changed"; fail=1; }
+printf '{}\n' > "$tmp/ls/report.json"
+expect 1 "holds jpcr_run's results (report.json)" -- "$curv" --dataset "$tmp/seq" --out "$tmp/ls"
+# jpcr_eval's report never replaces what it reads.
+expect 1 "is a file of the --gt dataset" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" \
+  --out "$tmp/seq/groundtruth.txt"
 # A pattern that cannot be scaled to the images fails before the run, naming the file.
 printf 'quadric:\n  pattern:\n    reference_width: 1\n' > "$tmp/tiny_ref.yaml"
 expect 1 "tiny_ref.yaml: quadric: pattern (radius 6, stride 3 at reference_width 1) scaled to 160 px wide" -- \

@@ -15,6 +15,10 @@ expect 1 "missing.txt: file does not exist" -- "$eval_bin" traj --gt "$tmp/gt.tx
 expect 1 "nan.txt:2: field 4 is NaN/Inf" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/nan.txt"
 expect 1 "unsorted.txt:2: timestamps are not sorted" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/unsorted.txt"
 expect 1 "empty.txt: no poses" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/empty.txt" --out "$tmp/report.json"
+# The report never replaces an input (here by another name for it).
+cp "$tmp/gt.txt" "$tmp/gt_before.txt"
+expect 1 "is --gt .*gt.txt itself" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/gt.txt" --out "$tmp/../$(basename "$tmp")/gt.txt"
+cmp -s "$tmp/gt.txt" "$tmp/gt_before.txt" || { echo "FAIL: --gt was overwritten"; fail=1; }
 printf '1 0 0 0 0 0 0 1\n2 1e308 0 0 0 0 0 1\n3 -1e308 0 0 0 0 0 1\n4 1e308 1e308 0 0 0 0 1\n' > "$tmp/huge.txt"
 expect 1 "huge.txt: the errors against .* are not finite" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/huge.txt"
 expect 2 "max-difference must be a positive number" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/gt.txt" --max-difference inf

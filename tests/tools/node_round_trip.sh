@@ -96,6 +96,7 @@ expect 0 "usage: jpcr_node" -- "$node" --help
 expect 2 "--method: unknown method 'bundle'" -- "$node" --method bundle
 expect 2 "--window must be in" -- "$node" --window 1
 expect 2 "--max-frames must be >= 0" -- "$node" --max-frames -1
+expect 2 "--max-frames is the front end's" -- "$node" --role backend --max-frames 5
 expect 2 "--idle-timeout must be >= 0" -- "$node" --idle-timeout -1
 expect 2 "domain must be in 0..232" -- "$node" --domain 300
 printf 'pipeline:\n  window: 99\n' > "$tmp/bad.yaml"

@@ -57,6 +57,14 @@ printf 'fx: 525\nfy: 525\ncx: 159.5\ncy: 119.5\nwidth: 320\nheight: 240\ndepth_s
 printf 'frontend:\n  icp:\n    max_distance: -1\n' > "$tmp/bad_params.yaml"
 printf 'frontend:\n  tracker:\n    keyframe_distance: 1\n' > "$tmp/typo_params.yaml"
 expect 1 "$bad_png" -- "$odo" --dataset "$tmp/broken" --config "$cam" --out "$tmp/x/traj.txt"
+# The outputs never replace the dataset's own files (on a copy: the real frames stay safe).
+cp "$tmp/broken/groundtruth.txt" "$tmp/gt_before.txt"
+expect 1 "groundtruth.txt: is a file of the --dataset dataset" -- \
+  "$odo" --dataset "$tmp/broken" --config "$cam" --out "$tmp/broken/groundtruth.txt"
+expect 1 "depth.txt: is a file of the --dataset dataset" -- \
+  "$odo" --dataset "$tmp/broken" --config "$cam" --out "$tmp/x.txt" --summary "$tmp/broken/depth.txt"
+cmp -s "$tmp/broken/groundtruth.txt" "$tmp/gt_before.txt" ||
+  { echo "FAIL: the dataset's groundtruth.txt was overwritten"; fail=1; }
 expect 1 "nosuch: dataset does not exist" -- "$odo" --dataset "$tmp/nosuch" --config "$cam" --out "$tmp/x.txt"
 # A run that fails creates no directory for its outputs.
 expect 1 "nosuch: dataset does not exist" -- "$odo" --dataset "$tmp/nosuch" --config "$cam" --out "$tmp/newdir/x.txt"

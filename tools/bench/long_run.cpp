@@ -132,6 +132,11 @@ int long_run_main(int argc, char** argv) {
     const int block = args.has("block") ? args.get_int("block") : tenth;
     if (warmup < 1 || block < 1 || warmup + block > frames)
       throw cli::UsageError("--warmup and --block must be positive, their sum at most --frames");
+    for (const char* bound : {"max-rss-growth", "max-heap-growth", "max-time-growth"}) {
+      const double percent = args.get_double(bound);
+      if (!(std::isfinite(percent) && percent >= 0.0))
+        throw cli::UsageError(std::string("--") + bound + " must be a percentage >= 0");
+    }
     SyntheticSequenceOptions o;
     o.scene = args.get("scene");
     o.frames = frames;

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <new>
 #include <sstream>
 
 #include "cli/stop_signal.hpp"
@@ -179,6 +180,10 @@ int run_program(const std::string& program, const std::function<int()>& body) {
     return 130;
   } catch (const InputError& e) {
     std::cerr << program << ": error: " << e.what() << '\n';
+    return 1;
+  } catch (const std::bad_alloc&) {
+    std::cerr << program << ": error: out of memory: the image size, frame count or window asked "
+              << "for needs more memory than this machine has\n";
     return 1;
   } catch (const std::exception& e) {
     std::cerr << program << ": error: " << e.what() << '\n';

@@ -1,5 +1,6 @@
 #include "cli/dataset_run_checks.hpp"
 
+#include <filesystem>
 #include <string>
 
 #include "jpcr/io/staged_output.hpp"
@@ -17,6 +18,15 @@ void check_dataset_run(const Arguments& args, const FrameSource& dataset,
     throw InputError((file ? args.get("params") : std::string("the built-in parameters")) +
                      ": quadric: " + e.what());
   }
+}
+
+void require_not_results_of(const Arguments& args, const std::string& marker,
+                            const std::string& program) {
+  const std::string out = args.get("out");
+  std::error_code ec;
+  if (std::filesystem::exists(std::filesystem::path(out) / marker, ec))
+    throw InputError(out + ": holds " + program + "'s results (" + marker +
+                     "); writing there would replace some of them (give another --out)");
 }
 
 }  // namespace jpcr::cli

@@ -14,4 +14,10 @@ namespace jpcr::cli {
 void check_dataset_run(const Arguments& args, const FrameSource& dataset,
                        const PatternParams& pattern);
 
+/// Throws InputError when --out holds another program's results, told by its `marker` file
+/// (jpcr_curvature's summary.json, jpcr_run's report.json): the two share curvature/, so writing
+/// there would replace that program's maps and leave its marker describing maps that are gone.
+void require_not_results_of(const Arguments& args, const std::string& marker,
+                            const std::string& program);
+
 }  // namespace jpcr::cli

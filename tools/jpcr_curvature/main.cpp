@@ -131,6 +131,7 @@ int run(int argc, char** argv) {
     const cli::FrameRange range =
         cli::parse_frame_range(args.has("frames") ? args.get("frames") : "", dataset->size());
     cli::check_dataset_run(args, *dataset, params.quadric.pattern);
+    cli::require_not_results_of(args, "report.json", "jpcr_run");
     // Written into a staging directory and moved into OUT at the end (io/staged_output.hpp).
     StagedOutput out(args.get("out"), {"curvature", "curvature_png", "ply", "summary.json"});
     const CurvatureWriter writer(out.directory(), args.get_flag("ply"), colors);

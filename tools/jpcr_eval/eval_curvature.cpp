@@ -12,6 +12,7 @@
 #include "jpcr/io/curvature_metrics.hpp"
 #include "jpcr/io/curvature_output.hpp"
 #include "jpcr/io/json_writer.hpp"
+#include "jpcr/io/staged_output.hpp"
 #include "jpcr/quadric/error.hpp"
 #include "jpcr/quadric/quadric_params.hpp"
 #include "jpcr_eval/eval_commands.hpp"
@@ -91,6 +92,9 @@ int run_curvature(int argc, char** argv) {
     if (!args.parse(argc, argv)) return 0;
     const std::string support = args.get("support");
     if (support != "pattern") support_radius(support, 0);  // a bad value fails before any read
+    if (args.has("out"))
+      for (const char* input : {"gt", "est"})
+        require_output_file_apart_from(args.get("out"), args.get(input), std::string("--") + input);
     const std::set<std::string> gt = curvature_stamps(args.get("gt"));
     const std::set<std::string> est = curvature_stamps(args.get("est"));
     std::optional<CurvatureErrorAccumulator> acc;

@@ -8,6 +8,7 @@
 #include "cli/arguments.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/json_writer.hpp"
+#include "jpcr/io/staged_output.hpp"
 #include "jpcr/io/trajectory_comparison.hpp"
 #include "jpcr/io/trajectory_metrics.hpp"
 #include "jpcr/io/tum_lists.hpp"
@@ -163,6 +164,11 @@ int run_trajectory(int argc, char** argv) {
     const double max_difference = args.get_double("max-difference");
     if (!(max_difference > 0.0) || !std::isfinite(max_difference))
       throw cli::UsageError("--max-difference must be a positive number of seconds");
+    if (args.has("out"))
+      for (const char* input : {"gt", "est", "baseline"})
+        if (args.has(input))
+          require_output_file_apart_from(args.get("out"), args.get(input),
+                                         std::string("--") + input);
     const Trajectory gt = read_trajectory(args.get("gt"));
     const Trajectory est = read_trajectory(args.get("est"));
     if (gt.empty()) throw InputError(args.get("gt") + ": no poses");

@@ -293,6 +293,10 @@ int node_main(int argc, char** argv) {
     o.device = cli::device_from(args, params);
     o.stop.max_items = args.get_int("max-frames");
     if (o.stop.max_items < 0) throw cli::UsageError("--max-frames must be >= 0");
+    if (role == "backend" && o.stop.max_items > 0)
+      throw cli::UsageError(
+          "--max-frames is the front end's; the back end stops at its end of "
+          "stream (give it to --role frontend)");
     o.stop.idle_timeout = args.get_double("idle-timeout");
     if (!(o.stop.idle_timeout >= 0.0)) throw cli::UsageError("--idle-timeout must be >= 0");
     const double flush_timeout = args.get_double("flush-timeout");

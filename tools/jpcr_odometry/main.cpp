@@ -22,6 +22,7 @@
 #include "jpcr/io/json_writer.hpp"
 #include "jpcr/io/open_dataset.hpp"
 #include "jpcr/io/params.hpp"
+#include "jpcr/io/staged_output.hpp"
 #include "jpcr/io/tum_lists.hpp"
 #include "jpcr/quadric/error.hpp"
 
@@ -161,6 +162,7 @@ int run(int argc, char** argv) {
     if (std::filesystem::weakly_canonical(out) == std::filesystem::weakly_canonical(summary))
       throw cli::UsageError("--summary and --out name the same file: " + out);
     for (const std::string& file : {out, summary}) {
+      require_output_file_apart_from(file, args.get("dataset"), "--dataset");
       if (std::filesystem::is_directory(file))
         throw InputError(file + ": is a directory, not a file to write");
       // The nearest existing parent must be a directory, or no run could write there.

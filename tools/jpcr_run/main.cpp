@@ -111,6 +111,7 @@ int run_main(int argc, char** argv) {
     const RefinerFactory refiners =
         device_refiner_factory(cli::device_from(args, params), std::cerr);
     cli::check_dataset_run(args, *dataset, pipeline.joint.quadric.pattern);
+    cli::require_not_results_of(args, "summary.json", "jpcr_curvature");
     // Everything is written into a staging directory and moved into OUT at the end: a run that
     // fails leaves OUT as it was, and a run into an earlier run's OUT replaces all its outputs.
     StagedOutput out(args.get("out"),

@@ -19,6 +19,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// A bound against typing errors: a million frames is over 9 hours of a 30 Hz camera.
+constexpr int kMaxFrames = 1000000;
+
 std::string scene_list() {
   std::string list;
   for (const std::string& name : available_scenes())
@@ -38,7 +41,7 @@ int run(int argc, char** argv) {
   args.option("scene", "scene name (configs/scenes/NAME.yaml) or a scene .yaml file",
               "room_spheres")
       .option("trajectory", "rail (10 mm per frame, translation only) | orbit | walk", "walk")
-      .option("frames", "number of frames", "100")
+      .option("frames", "number of frames, 1..1000000", "100")
       .option("noise", "none | range:PCT (Gaussian along the ray, PCT % of the range) | kinect",
               "none")
       .option("size",
@@ -64,7 +67,8 @@ int run(int argc, char** argv) {
       throw cli::UsageError(e.what());
     }
     options.frames = args.get_int("frames");
-    if (options.frames < 1) throw cli::UsageError("--frames must be at least 1");
+    if (options.frames < 1 || options.frames > kMaxFrames)
+      throw cli::UsageError("--frames must be in 1.." + std::to_string(kMaxFrames));
     const int seed = args.get_int("seed");
     if (seed < 0) throw cli::UsageError("--seed must be a non-negative integer");
     options.seed = static_cast<std::uint64_t>(seed);
