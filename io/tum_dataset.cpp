@@ -1,5 +1,6 @@
 #include "jpcr/io/tum_dataset.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <sstream>
 
@@ -117,6 +118,24 @@ TumDataset::TumDataset(const std::string& directory, const CameraIntrinsics& cam
                        const_cast<double*>(camera_.distortion.data()));
     cv::initUndistortRectifyMap(K, dist, cv::Mat(), K, cv::Size(camera_.width, camera_.height),
                                 CV_32FC1, undistortion_->map_x, undistortion_->map_y);
+    // Coefficients that send most pixels' rays outside the sensor are a typing or unit error
+    // (a lens keeps nearly all of its own image): refuse them rather than track empty frames.
+    std::size_t inside = 0;
+    for (int v = 0; v < camera_.height; ++v)
+      for (int u = 0; u < camera_.width; ++u) {
+        const float x = undistortion_->map_x.at<float>(v, u);
+        const float y = undistortion_->map_y.at<float>(v, u);
+        inside +=
+            (x >= 0.0f && x <= camera_.width - 1.0f && y >= 0.0f && y <= camera_.height - 1.0f) ? 1
+                                                                                                : 0;
+      }
+    const double fraction =
+        static_cast<double>(inside) / (static_cast<double>(camera_.width) * camera_.height);
+    if (fraction < 0.5)
+      throw InputError(directory_ + ": the camera's distortion coefficients take " +
+                       std::to_string(static_cast<int>(std::lround(100.0 * (1.0 - fraction)))) +
+                       " % of the pixels from outside the image (check them: OpenCV's order k1 "
+                       "k2 p1 p2 k3, for the depth camera)");
   }
 }
 

@@ -90,6 +90,21 @@ TEST(TumDataset, DistortionIsRemovedWithNearestNeighbour) {
   EXPECT_GT(checked, 1000);
 }
 
+TEST(TumDataset, DistortionThatLosesTheImageIsRefused) {
+  CameraIntrinsics fr1 = load_camera_yaml(std::string(JPCR_SOURCE_DIR) + "/configs/tum_fr1.yaml");
+  fr1.distortion = {1e30, 1e30, 0.0, 0.0, 0.0};  // every ray from far outside the sensor
+  try {
+    const TumDataset dataset(kFr1, fr1);
+    FAIL() << "accepted distortion " << fr1.distortion[0];
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("distortion coefficients take 100 % of the pixels"),
+              std::string::npos)
+        << e.what();
+  }
+  fr1.distortion = {-0.5, 0.0, 0.0, 0.0, 0.0};  // strong barrel: the corners, not the image
+  EXPECT_NO_THROW(TumDataset(kFr1, fr1));
+}
+
 TEST(TumDataset, MissingDirectoryAndList) {
   EXPECT_NE(error_of([] {
               TumDataset("/no/such/dir", CameraIntrinsics());
