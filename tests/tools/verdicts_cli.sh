@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # jpcr_run's verdicts.txt (issue 11): one line per frame of trajectory.txt with the same
 # timestamps, "timestamp front_end pair window trusted". On a single plane (a degenerate scene)
-# every frame after the first is flagged and the run still writes every output and exits 0.
+# every frame after the first is flagged, the run says so, and it still writes every output and
+# exits 0.
 set -uo pipefail
 build=$1 src=$2
 synth=$build/tools/jpcr_synth
@@ -13,6 +14,9 @@ source "$src/tests/tools/expect.sh"
 expect 0 "wrote 5 frames" -- "$synth" --scene single_plane --frames 5 --size 160x120 --seed 3 \
   --out "$tmp/plane"
 expect 0 "wrote 5 poses" -- "$run" --dataset "$tmp/plane" --out "$tmp/run"
+# ... and says so at the end, not only in verdicts.txt.
+expect 0 "warning: 4 of 5 frames are not trusted (front end: 4 degenerate)" -- \
+  "$run" --dataset "$tmp/plane" --out "$tmp/run"
 verdicts=$tmp/run/verdicts.txt
 [ -s "$verdicts" ] || { echo "FAIL: verdicts.txt missing"; exit 1; }
 stamps() { grep -v '^#' "$1" | awk '{print $1}'; }

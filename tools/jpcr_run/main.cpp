@@ -187,6 +187,8 @@ int run_main(int argc, char** argv) {
     std::cout << "wrote " << refined.size() << " poses, " << runner.keyframes().size()
               << " keyframes and " << writer.written() << " curvature maps to " << out.target()
               << '\n';
+    if (const std::string warning = run::untrusted_warning(runner); !warning.empty())
+      std::cerr << "jpcr_run: warning: " << warning << '\n';
     if (errors) run::print_error_table(std::cout, to_string(pipeline.method), front_errors, errors);
     return 0;
   });

@@ -1,6 +1,8 @@
 #include "jpcr_run/run_report.hpp"
 
 #include <cstdio>
+#include <map>
+#include <sstream>
 
 #include "jpcr/io/json_writer.hpp"
 #include "jpcr/io/number_format.hpp"
@@ -138,6 +140,26 @@ void write_verdicts(std::ostream& out, const KeyframePipeline& p) {
         << refinement(v.pair) << ' ' << refinement(v.window) << ' ' << (v.trusted() ? "yes" : "no")
         << '\n';
   }
+}
+
+std::string untrusted_warning(const KeyframePipeline& p) {
+  std::size_t untrusted = 0;
+  std::map<std::string, int> front_end;  // failures by verdict
+  for (std::size_t i = 0; i < p.frames().size(); ++i) {
+    const FrameVerdicts v = p.verdicts(i);
+    untrusted += v.trusted() ? 0 : 1;
+    if (v.front_end != IcpVerdict::ok) ++front_end[to_string(v.front_end)];
+  }
+  if (untrusted == 0) return {};
+  std::ostringstream line;
+  line << untrusted << " of " << p.frames().size() << " frames are not trusted";
+  const char* separator = " (front end: ";
+  for (const auto& [verdict, count] : front_end) {
+    line << separator << count << ' ' << verdict;
+    separator = ", ";
+  }
+  line << (front_end.empty() ? "" : ")") << "; verdicts.txt says which";
+  return line.str();
 }
 
 void print_error_table(std::ostream& out, const std::string& method,

@@ -30,6 +30,11 @@ void write_report(std::ostream& out, const std::string& dataset, const KeyframeP
 /// trusted" (FrameVerdicts; "-" where a refinement did not run, trusted "yes" or "no").
 void write_verdicts(std::ostream& out, const KeyframePipeline& pipeline);
 
+/// One warning line when frames are not trusted (verdicts.txt's last column), with the front
+/// end's failures by kind, e.g. "7 of 8 frames are not trusted (front end: 7 too_few_points)";
+/// empty when every frame is.
+std::string untrusted_warning(const KeyframePipeline& pipeline);
+
 /// "method  ATE m  RPE m/frame  RPE deg/frame  rel. transl. m  rel. rot. rad" rows.
 void print_error_table(std::ostream& out, const std::string& method,
                        const std::optional<TrajectoryErrors>& front_end,
