@@ -22,6 +22,21 @@ std::string describe(const cv::Mat& m) {
   return std::string(bits) + " with " + std::to_string(m.channels()) + " channel(s)";
 }
 
+// What the PNG header says the image is (bit depth and colour type, IHDR bytes 24 and 25): more
+// exact than the decoded channel count, where OpenCV turns grey + alpha into four channels.
+std::string describe_png_header(const std::string& bytes, const cv::Mat& decoded) {
+  if (bytes.size() < 26 || bytes.compare(1, 3, "PNG") != 0) return describe(decoded);
+  const int bit_depth = static_cast<unsigned char>(bytes[24]);
+  const int colour = static_cast<unsigned char>(bytes[25]);
+  const char* kind = colour == 0   ? "grey"
+                     : colour == 2 ? "RGB"
+                     : colour == 3 ? "palette"
+                     : colour == 4 ? "grey + alpha"
+                     : colour == 6 ? "RGBA"
+                                   : "unknown colour type";
+  return std::to_string(bit_depth) + "-bit " + kind;
+}
+
 bool starts_with(const std::string& bytes, const char* magic, std::size_t length) {
   return bytes.size() >= length && bytes.compare(0, length, magic, length) == 0;
 }
@@ -73,7 +88,8 @@ DepthImage decode_depth_png(const std::string& bytes, const std::string& path, d
                             int expected_width, int expected_height) {
   const cv::Mat raw = decode(bytes, path, cv::IMREAD_UNCHANGED);
   if (raw.type() != CV_16UC1) {
-    throw InputError(path + ": expected a 16-bit single-channel depth PNG, got " + describe(raw));
+    throw InputError(path + ": expected a 16-bit single-channel depth PNG, got " +
+                     describe_png_header(bytes, raw));
   }
   if (expected_width > 0 && (raw.cols != expected_width || raw.rows != expected_height)) {
     throw InputError(path + ": image is " + std::to_string(raw.cols) + "x" +

@@ -158,8 +158,14 @@ TEST(TumDataset, CorruptAndEightBitPngsAndWrongSize) {
       std::string(JPCR_SOURCE_DIR) + "/tests/fuzz/corpus/fuzz_depth_png/regression_gdcm_assert";
   EXPECT_NE(error_of([&] { load_depth_png(regression, 5000.0); }).find("not a PNG or JPEG file"),
             std::string::npos);
-  EXPECT_NE(error_of([&] { dataset.load(1); }).find("expected a 16-bit single-channel depth PNG"),
+  EXPECT_NE(error_of([&] {
+              dataset.load(1);
+            }).find("expected a 16-bit single-channel depth PNG, got 8-bit RGB"),
             std::string::npos);
+  // The PNG header's words (OpenCV decodes grey + alpha as four channels, so its count misleads).
+  cv::imwrite(dir.file("depth/1.png"), cv::Mat(6, 8, CV_16UC4, cv::Scalar(1, 2, 3, 4)));
+  const std::string rgba = error_of([&] { dataset.load(1); });
+  EXPECT_NE(rgba.find("got 16-bit RGBA"), std::string::npos) << rgba;
   EXPECT_NE(error_of([&] { dataset.load(2); }).find("image is 8x5 but the camera is 8x6"),
             std::string::npos);
 }
