@@ -113,6 +113,10 @@ PoseSpread pose_spread(const Matrix6d& covariance, const Eigen::Isometry3d& pose
 /// The steps stay empty when joint_covariance is (a degenerate S).
 void report_pose_spread(RefinementResult& result);
 
+/// Thread safety: refine() is const and keeps no state between calls, so one refiner may be
+/// called from several threads at once (the CPU refiners parallelise each call with OpenMP, so
+/// concurrent calls share the cores); the GPU J-ftf serialises its calls (they share the device
+/// buffers).
 class Refiner {
  public:
   virtual ~Refiner() = default;

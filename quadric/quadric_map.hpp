@@ -14,8 +14,11 @@
 namespace jpcr {
 
 struct QuadricMap {
-  Image<Quadric> quadrics;   // (R, p̄, t_z, a, b, c); meaningful where status == kValid
-  CurvatureImage curvature;  // κ₁, κ₂ (1/m); NaN where invalid (never 0 for "unknown")
+  Image<Quadric> quadrics;  // (R, p̄, t_z, a, b, c); meaningful where status == kValid
+  // κ₁ ≥ κ₂ (1/m); NaN where invalid (never 0 for "unknown"). Signed with the normal toward the
+  // camera (quadric_model.hpp): a sphere of radius R seen from outside is −1/R, the inside of a
+  // bowl or a room's concave corner +1/R, a plane 0.
+  CurvatureImage curvature;
   Image<Eigen::Vector3f> direction;  // first principal direction d₁ (camera frame); NaN invalid
   Image<QuadricStatus> status;       // kValid or why not
 

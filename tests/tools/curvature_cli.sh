@@ -94,6 +94,11 @@ expect 1 "holds jpcr_curvature's results (summary.json)" -- "$build/tools/jpcr_r
 [ "$(ls "$tmp/it/curvature" | wc -l)" = 3 ] || { echo "FAIL: it/curvature changed"; fail=1; }
 printf '{}\n' > "$tmp/ls/report.json"
 expect 1 "holds jpcr_run's results (report.json)" -- "$curv" --dataset "$tmp/seq" --out "$tmp/ls"
+# A truncated map: named once, with the problem.
+mkdir -p "$tmp/trunc/curvature"
+head -c 100 "$tmp/it/curvature/0.000000.npy" > "$tmp/trunc/curvature/0.000000.npy"
+expect 1 "error: $tmp/trunc/curvature/0.000000.npy: truncated" -- \
+  "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/trunc"
 # jpcr_eval's report never replaces what it reads.
 expect 1 "is a file of the --gt dataset" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" \
   --out "$tmp/seq/groundtruth.txt"

@@ -106,8 +106,10 @@ int run_curvature(int argc, char** argv) {
       const std::string est_file = (fs::path(args.get("est")) / name).string();
       try {
         acc->add(truth, read_curvature_npy(est_file));
-      } catch (const InputError& e) {  // name the map, not only the problem
-        throw InputError(est_file + ": " + e.what());
+      } catch (const InputError& e) {  // name the map, not only the problem (once)
+        const std::string what = e.what();
+        if (what.rfind(est_file + ": ", 0) == 0) throw;
+        throw InputError(est_file + ": " + what);
       }
     }
     const CurvatureErrors e = acc ? acc->result() : CurvatureErrors{};
