@@ -6,6 +6,7 @@
 #include <cerrno>
 #include <filesystem>
 #include <iterator>
+#include <stdexcept>
 #include <system_error>
 
 #include "jpcr/io/atomic_file.hpp"
@@ -22,8 +23,11 @@ const char* const kPrevious = ".previous";
 
 // Removes the staging directories `prefix`PID in `parent` whose process no longer exists: those
 // of runs that were killed (SIGKILL, a second Ctrl-C) before they could clean up. A PID that is
-// alive, or that this process may not signal, is left alone.
-void remove_abandoned_staging(const fs::path& parent, const std::string& prefix) {
+// alive, or that this process may not signal, is left alone. A run killed inside commit() may
+// have set the target's entries aside without moving the new ones in: those go back first, to
+// `target` where it lacks them.
+void remove_abandoned_staging(const fs::path& parent, const std::string& prefix,
+                              const fs::path& target) {
   std::error_code ec;
   for (const fs::directory_entry& e : fs::directory_iterator(parent, ec)) {
     const std::string name = e.path().filename().string();
@@ -34,6 +38,9 @@ void remove_abandoned_staging(const fs::path& parent, const std::string& prefix)
     if (pid <= 0 || pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH)
       continue;
     std::error_code ignored;
+    for (const fs::directory_entry& aside : fs::directory_iterator(e.path() / kPrevious, ignored))
+      if (!fs::exists(fs::symlink_status(target / aside.path().filename(), ignored)))
+        fs::rename(aside.path(), target / aside.path().filename(), ignored);
     fs::remove_all(e.path(), ignored);
   }
 }
@@ -52,7 +59,11 @@ StagedOutput::StagedOutput(std::string target, std::vector<std::string> layout)
   ensure_directory(parent.string());
   // A hidden sibling: renames into the target stay on one file system.
   const std::string prefix = "." + t.filename().string() + ".partial-";
-  remove_abandoned_staging(parent, prefix);
+  remove_abandoned_staging(parent, prefix, t);
+  for (const std::string& name : layout_)
+    if (name.empty() || name[0] == '.' || name.find('/') != std::string::npos)
+      throw std::invalid_argument("StagedOutput: layout name '" + name +
+                                  "' must be a plain, visible file name");
   staging_ = (parent / (prefix + std::to_string(::getpid()))).string();
   fs::remove_all(staging_, ec);
   try {
@@ -64,7 +75,7 @@ StagedOutput::StagedOutput(std::string target, std::vector<std::string> layout)
 }
 
 StagedOutput::~StagedOutput() {
-  if (committed_) return;
+  if (committed_ || keep_staging_) return;
   std::error_code ec;
   fs::remove_all(staging_, ec);  // a failed run leaves nothing behind
 }
@@ -86,12 +97,20 @@ void StagedOutput::commit() {
   const fs::path previous = fs::path(staging_) / kPrevious;
   ensure_directory(previous.string());
   std::vector<std::string> moved_aside, moved_in;
-  const auto roll_back = [&] {
-    std::error_code ignored;
+  // Puts the moved-aside entries back; the ones that cannot go back stay in `previous`, which
+  // is then kept (not removed with the staging directory) and named in the error.
+  const auto roll_back = [&]() -> std::string {
+    std::error_code ec;
     for (const std::string& name : moved_in)
-      fs::remove_all(fs::path(target_) / name, ignored);
-    for (const std::string& name : moved_aside)
-      fs::rename(previous / name, fs::path(target_) / name, ignored);
+      fs::remove_all(fs::path(target_) / name, ec);
+    bool all_back = true;
+    for (const std::string& name : moved_aside) {
+      fs::rename(previous / name, fs::path(target_) / name, ec);
+      all_back = all_back && !ec;
+    }
+    if (all_back) return "; the earlier outputs in " + target_ + " are kept as they were";
+    keep_staging_ = true;
+    return "; some earlier outputs could not be put back and are kept in " + previous.string();
   };
   std::error_code ec;
   for (const std::string& name : names) {
@@ -99,9 +118,8 @@ void StagedOutput::commit() {
     if (!fs::exists(fs::symlink_status(to, ec))) continue;
     fs::rename(to, previous / name, ec);
     if (ec) {
-      roll_back();
-      throw InputError(to.string() + ": cannot replace (" + ec.message() +
-                       "); the earlier outputs in " + target_ + " are kept as they were");
+      const std::string why = ec.message();
+      throw InputError(to.string() + ": cannot replace (" + why + ")" + roll_back());
     }
     moved_aside.push_back(name);
   }
@@ -110,9 +128,8 @@ void StagedOutput::commit() {
     if (!fs::exists(fs::symlink_status(from, ec))) continue;
     fs::rename(from, to, ec);
     if (ec) {
-      roll_back();
-      throw InputError(to.string() + ": cannot be moved into place (" + ec.message() +
-                       "); the earlier outputs in " + target_ + " are kept as they were");
+      const std::string why = ec.message();
+      throw InputError(to.string() + ": cannot be moved into place (" + why + ")" + roll_back());
     }
     moved_in.push_back(name);
   }
@@ -135,6 +152,27 @@ void require_output_apart_from(const std::string& target, const std::string& inp
   }
 }
 
+namespace {
+
+// Whether `inside`, a path relative to a dataset or results directory, names one of its files:
+// the TUM layout's lists and folders, and what jpcr_run and jpcr_curvature write there.
+bool is_input_directory_file(const fs::path& inside) {
+  if (inside.empty() || *inside.begin() == ".." || inside.is_absolute()) return false;
+  const std::string first = inside.begin()->string();
+  if (std::distance(inside.begin(), inside.end()) > 1) {
+    for (const char* folder : {"depth", "rgb", "curvature", "normals", "curvature_png", "ply"})
+      if (first == folder) return true;
+    return false;
+  }
+  for (const char* file :
+       {"depth.txt", "rgb.txt", "groundtruth.txt", "camera.yaml", "report.json", "summary.json",
+        "trajectory.txt", "verdicts.txt", "front_end.txt", "keyframes.txt"})
+    if (first == file) return true;
+  return first.rfind("associations", 0) == 0 && inside.extension() == ".txt";
+}
+
+}  // namespace
+
 void require_output_file_apart_from(const std::string& target, const std::string& input,
                                     const std::string& option) {
   std::error_code ec;
@@ -142,18 +180,18 @@ void require_output_file_apart_from(const std::string& target, const std::string
     throw InputError(target + ": is " + option + " " + input +
                      " itself; writing it would destroy the input (give another output file)");
   if (!fs::is_directory(input, ec)) return;
-  const fs::path inside =
-      fs::weakly_canonical(target, ec).lexically_relative(fs::weakly_canonical(input, ec));
-  if (ec || inside.empty() || *inside.begin() == "..") return;
-  const std::string first = inside.begin()->string();
-  const bool dataset_file =
-      std::distance(inside.begin(), inside.end()) > 1
-          ? (first == "depth" || first == "rgb" || first == "curvature" || first == "normals")
-          : (first == "depth.txt" || first == "rgb.txt" || first == "groundtruth.txt" ||
-             first == "camera.yaml" ||
-             (first.rfind("associations", 0) == 0 && inside.extension() == ".txt"));
-  if (dataset_file)
-    throw InputError(target + ": is a file of the " + option + " dataset " + input +
+  // Both as written (a folder of the dataset may be a link to elsewhere) and with the links of
+  // the target's folder resolved (the dataset reached by another path); the file name itself is
+  // kept, so a groundtruth.txt that is a link still reads as groundtruth.txt.
+  const fs::path as_written = fs::absolute(target, ec)
+                                  .lexically_normal()
+                                  .lexically_relative(fs::absolute(input, ec).lexically_normal());
+  const fs::path file = fs::path(target).filename();
+  const fs::path resolved =
+      (fs::weakly_canonical(fs::absolute(target, ec).parent_path(), ec) / file)
+          .lexically_relative(fs::weakly_canonical(input, ec));
+  if (is_input_directory_file(as_written) || is_input_directory_file(resolved))
+    throw InputError(target + ": is a file of " + option + " " + input +
                      "; writing it would destroy the input (give another output file)");
 }
 

@@ -5,7 +5,9 @@
 // outputs are never mixed with a new run's, and a failed run leaves nothing half written.
 // The staging directory is `.NAME.partial-PID` beside the target; one left by a process that
 // was killed outright (SIGKILL) is removed by the next StagedOutput for the same target once
-// that PID no longer exists.
+// that PID no longer exists. A process killed inside commit(), between setting the target's
+// entries aside and moving the new ones in, leaves them in `.NAME.partial-PID/.previous`; that
+// next StagedOutput puts them back where the target lacks them.
 //
 //   StagedOutput out("run1", {"trajectory.txt", "curvature"});
 //   write_trajectory(out.path("trajectory.txt"), ...);   // into run1/.staging
@@ -44,6 +46,7 @@ class StagedOutput {
   std::string target_, staging_;
   std::vector<std::string> layout_;
   bool committed_ = false;
+  bool keep_staging_ = false;  // a failed roll back left earlier outputs in it
 };
 
 /// Throws InputError when `target` is `input` itself (the same directory after links and ".."),
@@ -54,10 +57,12 @@ void require_output_apart_from(const std::string& target, const std::string& inp
                                const std::string& option);
 
 /// Throws InputError when writing the file `target` would overwrite an input: `input` itself (a
-/// trajectory, a rawlog; the same file after links and ".."), or, when `input` is a dataset
-/// directory, one of its files (depth.txt, rgb.txt, groundtruth.txt, associations*.txt,
-/// camera.yaml, or anything under depth/, rgb/, curvature/, normals/). Other new files inside
-/// a dataset directory are allowed. `option` names the input in the message ("--gt").
+/// trajectory, a rawlog; the same file after links and ".."), or, when `input` is a dataset or
+/// results directory, one of its files: depth.txt, rgb.txt, groundtruth.txt, associations*.txt,
+/// camera.yaml, what jpcr_run and jpcr_curvature write (report.json, summary.json,
+/// trajectory.txt, verdicts.txt, front_end.txt, keyframes.txt), or anything under depth/, rgb/,
+/// curvature/, normals/, curvature_png/, ply/. Other new files inside such a directory are
+/// allowed. `option` names the input in the message ("--gt").
 void require_output_file_apart_from(const std::string& target, const std::string& input,
                                     const std::string& option);
 

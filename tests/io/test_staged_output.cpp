@@ -178,5 +178,57 @@ TEST(StagedOutput, StagingOfAKilledRunIsRemovedAndALiveOneKept) {
   EXPECT_TRUE(fs::exists(out.directory()));
 }
 
+// A run killed inside commit(), after setting the target's entries aside: the next run puts back
+// the ones the target lacks, and leaves the ones the killed run had already replaced.
+TEST(StagedOutput, EntriesSetAsideByARunKilledInCommitGoBack) {
+  test::TempDir dir;
+  const std::string target = dir.file("run");
+  const std::string dead = dir.file(".run.partial-" + std::to_string(finished_process()));
+  fs::create_directories(target);
+  fs::create_directories(dead + "/.previous/curvature");
+  write(dead + "/.previous/curvature/old.npy", "an earlier run's map");
+  write(dead + "/.previous/report.json", "an earlier run's report");
+  write(target + "/report.json", "the killed run's report, already moved in");
+  StagedOutput out(target, {"report.json", "curvature"});
+  EXPECT_FALSE(fs::exists(dead));
+  EXPECT_EQ(read_file(target + "/curvature/old.npy"), "an earlier run's map");
+  EXPECT_EQ(read_file(target + "/report.json"), "the killed run's report, already moved in");
+}
+
+TEST(RequireOutputFileApartFrom, RefusesTheInputsOwnFilesThroughLinksAndAllowsNewOnes) {
+  test::TempDir dir;
+  const std::string data = dir.file("data");
+  fs::create_directories(data);
+  fs::create_directories(dir.file("store/frames"));
+  fs::create_directory_symlink(dir.file("store/frames"), data + "/depth");  // on another disk
+  write(dir.file("store/gt.txt"), "1 0 0 0 0 0 0 1\n");
+  fs::create_symlink(dir.file("store/gt.txt"), data + "/groundtruth.txt");
+  write(data + "/depth.txt", "");
+  const auto refused = [&](const std::string& target, const std::string& input) {
+    try {
+      require_output_file_apart_from(target, input, "--dataset");
+    } catch (const InputError& e) {
+      return std::string(e.what()).find(target + ": is ") == 0;
+    }
+    return false;
+  };
+  EXPECT_TRUE(refused(data + "/depth.txt", data));
+  EXPECT_TRUE(refused(data + "/depth/0.000000.png", data));  // through the folder's link
+  EXPECT_TRUE(refused(data + "/groundtruth.txt", data));     // a link itself
+  EXPECT_TRUE(refused(dir.file("store/../data/rgb.txt"), data));
+  EXPECT_TRUE(refused(data + "/report.json", data));
+  EXPECT_TRUE(refused(dir.file("store/gt.txt"), data + "/groundtruth.txt"));  // the same file
+  EXPECT_FALSE(refused(data + "/odometry.txt", data));  // a new file beside the dataset's
+  EXPECT_FALSE(refused(dir.file("out/depth.txt"), data));
+  EXPECT_FALSE(refused(dir.file("data_copy.txt"), data));
+}
+
+TEST(StagedOutput, LayoutNamesArePlainVisibleFileNames) {
+  test::TempDir dir;
+  for (const char* name : {".previous", "", "a/b"})
+    EXPECT_THROW(StagedOutput(dir.file("run"), {"report.json", name}), std::invalid_argument)
+        << name;
+}
+
 }  // namespace
 }  // namespace jpcr
