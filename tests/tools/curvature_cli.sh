@@ -99,8 +99,10 @@ mkdir -p "$tmp/trunc/curvature"
 head -c 100 "$tmp/it/curvature/0.000000.npy" > "$tmp/trunc/curvature/0.000000.npy"
 expect 1 "error: $tmp/trunc/curvature/0.000000.npy: truncated" -- \
   "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/trunc"
-# jpcr_eval's report never replaces what it reads.
-expect 1 "is a file of the --gt dataset" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" \
+# jpcr_eval's report never replaces what it reads, nor the results it scores.
+expect 1 "summary.json: is a file of --est" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" \
+  --out "$tmp/it/summary.json"
+expect 1 "is a file of --gt" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" \
   --out "$tmp/seq/groundtruth.txt"
 # A pattern that cannot be scaled to the images fails before the run, naming the file.
 printf 'quadric:\n  pattern:\n    reference_width: 1\n' > "$tmp/tiny_ref.yaml"

@@ -59,10 +59,13 @@ printf 'frontend:\n  tracker:\n    keyframe_distance: 1\n' > "$tmp/typo_params.y
 expect 1 "$bad_png" -- "$odo" --dataset "$tmp/broken" --config "$cam" --out "$tmp/x/traj.txt"
 # The outputs never replace the dataset's own files (on a copy: the real frames stay safe).
 cp "$tmp/broken/groundtruth.txt" "$tmp/gt_before.txt"
-expect 1 "groundtruth.txt: is a file of the --dataset dataset" -- \
+expect 1 "groundtruth.txt: is a file of --dataset" -- \
   "$odo" --dataset "$tmp/broken" --config "$cam" --out "$tmp/broken/groundtruth.txt"
-expect 1 "depth.txt: is a file of the --dataset dataset" -- \
+expect 1 "depth.txt: is a file of --dataset" -- \
   "$odo" --dataset "$tmp/broken" --config "$cam" --out "$tmp/x.txt" --summary "$tmp/broken/depth.txt"
+cp "$cam" "$tmp/cam.yaml"
+expect 1 "cam.yaml: is --config" -- \
+  "$odo" --dataset "$tmp/broken" --config "$tmp/cam.yaml" --out "$tmp/cam.yaml"
 cmp -s "$tmp/broken/groundtruth.txt" "$tmp/gt_before.txt" ||
   { echo "FAIL: the dataset's groundtruth.txt was overwritten"; fail=1; }
 expect 1 "nosuch: dataset does not exist" -- "$odo" --dataset "$tmp/nosuch" --config "$cam" --out "$tmp/x.txt"

@@ -163,6 +163,9 @@ int run(int argc, char** argv) {
       throw cli::UsageError("--summary and --out name the same file: " + out);
     for (const std::string& file : {out, summary}) {
       require_output_file_apart_from(file, args.get("dataset"), "--dataset");
+      for (const char* input : {"config", "params"})
+        if (args.has(input))
+          require_output_file_apart_from(file, args.get(input), std::string("--") + input);
       if (std::filesystem::is_directory(file))
         throw InputError(file + ": is a directory, not a file to write");
       // The nearest existing parent must be a directory, or no run could write there.
