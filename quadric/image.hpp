@@ -3,16 +3,32 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <limits>
 #include <stdexcept>
+#include <type_traits>
 #include <vector>
 
+#include <Eigen/Core>
+
 namespace jpcr {
+
+/// The fill of an image made without one: all-NaN for Eigen's matrices (their default
+/// constructor leaves the values uninitialised; NaN is "invalid" in every vertex, normal and
+/// curvature map), T{} otherwise (0 for numbers).
+template <typename T>
+T default_fill() {
+  if constexpr (std::is_base_of_v<Eigen::DenseBase<T>, T>) {
+    return T::Constant(std::numeric_limits<typename T::Scalar>::quiet_NaN());
+  } else {
+    return T{};
+  }
+}
 
 template <typename T>
 class Image {
  public:
   Image() = default;
-  Image(int width, int height, const T& fill = T{}) : width_(width), height_(height) {
+  Image(int width, int height, const T& fill = default_fill<T>()) : width_(width), height_(height) {
     if (width < 0 || height < 0) throw std::invalid_argument("Image: negative size");
     data_.assign(static_cast<std::size_t>(width) * static_cast<std::size_t>(height), fill);
   }

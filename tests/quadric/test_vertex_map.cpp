@@ -52,5 +52,20 @@ TEST(Image, BoundsAreTwoDimensional) {
   EXPECT_FALSE(image.in_bounds(0, 4));
 }
 
+// Eigen's default constructor leaves a vector uninitialised, so an image of vectors made without
+// a fill would hold whatever the allocator returned; it is all-NaN (invalid) instead.
+TEST(Image, MadeWithoutAFillIsInvalidForVectorsAndZeroForNumbers) {
+  const VertexMap vertices(3, 2);
+  const CurvatureImage curvature(3, 2);
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    EXPECT_TRUE(vertices[i].array().isNaN().all()) << i;
+    EXPECT_FALSE(is_valid(vertices[i]));
+    EXPECT_TRUE(curvature[i].array().isNaN().all()) << i;
+  }
+  const DepthImage depth(3, 2);
+  for (float z : depth)
+    EXPECT_EQ(z, 0.0f);
+}
+
 }  // namespace
 }  // namespace jpcr
