@@ -80,6 +80,13 @@ StagedOutput::~StagedOutput() {
   fs::remove_all(staging_, ec);  // a failed run leaves nothing behind
 }
 
+std::string StagedOutput::as_target(std::string message) const {
+  for (std::size_t at = 0; (at = message.find(staging_, at)) != std::string::npos;
+       at += target_.size())
+    message.replace(at, staging_.size(), target_);
+  return message;
+}
+
 std::string StagedOutput::path(const std::string& name) const {
   return (fs::path(staging_) / name).string();
 }

@@ -32,6 +32,10 @@ class StagedOutput {
   StagedOutput(const StagedOutput&) = delete;
   StagedOutput& operator=(const StagedOutput&) = delete;
 
+  /// `message` with the staging directory's path replaced by the target's: for the errors of
+  /// writes into the staging directory (a full disk), since the user knows the target (--out).
+  std::string as_target(std::string message) const;
+
   /// The staging directory, and a path inside it.
   const std::string& directory() const { return staging_; }
   std::string path(const std::string& name) const;

@@ -42,6 +42,17 @@ TEST(StagedOutput, NothingReachesTheTargetBeforeCommit) {
   EXPECT_EQ(entries(dir.path()), 1);  // only the target: no staging left
 }
 
+TEST(StagedOutput, ErrorsOfWritesIntoTheStagingDirectoryCanNameTheTarget) {
+  test::TempDir dir;
+  const std::string target = dir.file("run");
+  const StagedOutput out(target, {"curvature"});
+  const std::string error =
+      out.path("curvature/1.npy") + ": cannot write (No space left on device)";
+  EXPECT_EQ(out.as_target(error),
+            target + "/curvature/1.npy: cannot write (No space left on device)");
+  EXPECT_EQ(out.as_target("no path here"), "no path here");
+}
+
 TEST(StagedOutput, AFailedRunLeavesTheTargetAsItWas) {
   test::TempDir dir;
   const std::string target = dir.file("run");

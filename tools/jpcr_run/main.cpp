@@ -32,6 +32,11 @@ namespace jpcr {
 
 namespace {
 
+// A write into OUT that failed (a full disk): passed on as it is, not blamed on the dataset.
+struct OutputError : InputError {
+  using InputError::InputError;
+};
+
 Trajectory keyframe_trajectory(const KeyframePipeline& p) {
   Trajectory out;
   for (const PipelineKeyframe& k : p.keyframes())
@@ -127,8 +132,12 @@ int run_main(int argc, char** argv) {
           (void)k;
           (void)self;
           // The vertex map is only needed for the PLY; compute_vertex_map is cheap next to J-ftf.
-          writer.write(format_stamp(frame.timestamp), quadrics,
-                       compute_vertex_map(frame.depth, frame.camera));
+          try {
+            writer.write(format_stamp(frame.timestamp), quadrics,
+                         compute_vertex_map(frame.depth, frame.camera));
+          } catch (const InputError& e) {  // e.g. a full disk: name OUT, not the staging directory
+            throw OutputError(out.as_target(e.what()));
+          }
         },
         refiners);
     self = &runner;
@@ -141,6 +150,8 @@ int run_main(int argc, char** argv) {
       const PipelineFrame& f = [&]() -> const PipelineFrame& {
         try {
           return runner.add(dataset->load(i));
+        } catch (const OutputError&) {  // the output's fault, not the dataset's
+          throw;
         } catch (const InputError& e) {  // name the dataset and the frame
           throw InputError(args.get("dataset") + ": frame " + std::to_string(i) + ": " + e.what());
         }
@@ -169,20 +180,24 @@ int run_main(int argc, char** argv) {
 #endif
 
     const Trajectory refined = runner.trajectory();
-    write_trajectory(out.path("trajectory.txt"), refined);
-    write_file_atomically(out.path("verdicts.txt"),
-                          [&](std::ostream& o) { run::write_verdicts(o, runner); });
-    write_trajectory(out.path("front_end.txt"), runner.front_end_trajectory());
-    write_trajectory(out.path("keyframes.txt"), keyframe_trajectory(runner));
     Trajectory gt;
     for (std::size_t i = range.first; i < range.last; ++i)
       if (const std::optional<Eigen::Isometry3d> T = dataset->ground_truth(i))
         gt.push_back({dataset->timestamp(i), *T});
     const auto front_errors = run::evaluate(gt, runner.front_end_trajectory());
     const auto errors = run::evaluate(gt, refined);
-    write_file_atomically(out.path("report.json"), [&](std::ostream& o) {
-      run::write_report(o, args.get("dataset"), runner, front_errors, errors, progress.seconds());
-    });
+    try {
+      write_trajectory(out.path("trajectory.txt"), refined);
+      write_file_atomically(out.path("verdicts.txt"),
+                            [&](std::ostream& o) { run::write_verdicts(o, runner); });
+      write_trajectory(out.path("front_end.txt"), runner.front_end_trajectory());
+      write_trajectory(out.path("keyframes.txt"), keyframe_trajectory(runner));
+      write_file_atomically(out.path("report.json"), [&](std::ostream& o) {
+        run::write_report(o, args.get("dataset"), runner, front_errors, errors, progress.seconds());
+      });
+    } catch (const InputError& e) {  // e.g. a full disk: name OUT, not the staging directory
+      throw InputError(out.as_target(e.what()));
+    }
     out.commit();
     std::cout << "wrote " << refined.size() << " poses, " << runner.keyframes().size()
               << " keyframes and " << writer.written() << " curvature maps to " << out.target()
