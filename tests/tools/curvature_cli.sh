@@ -99,6 +99,16 @@ mkdir -p "$tmp/trunc/curvature"
 head -c 100 "$tmp/it/curvature/0.000000.npy" > "$tmp/trunc/curvature/0.000000.npy"
 expect 1 "error: $tmp/trunc/curvature/0.000000.npy: truncated" -- \
   "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/trunc"
+# A map with ±Inf where NaN belongs: scored as missing, and said so (plain python3, no numpy).
+mkdir -p "$tmp/inf/curvature"
+python3 - "$tmp/it/curvature/0.000000.npy" "$tmp/inf/curvature/0.000000.npy" <<'PY'
+import struct, sys
+d = bytearray(open(sys.argv[1], "rb").read())
+start = 10 + struct.unpack("<H", d[8:10])[0]  # .npy version 1: the data after the header
+d[start:start + 8 * 100] = struct.pack("<f", float("inf")) * 200  # 100 pixels of float32 pairs
+open(sys.argv[2], "wb").write(d)
+PY
+expect 0 "warning: 100 pixels of .*inf are +-Inf" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/inf"
 # jpcr_eval's report never replaces what it reads, nor the results it scores.
 expect 1 "summary.json: is a file of --est" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" \
   --out "$tmp/it/summary.json"

@@ -98,6 +98,7 @@ int run_curvature(int argc, char** argv) {
     const std::set<std::string> gt = curvature_stamps(args.get("gt"));
     const std::set<std::string> est = curvature_stamps(args.get("est"));
     std::optional<CurvatureErrorAccumulator> acc;
+    std::size_t infinite = 0;  // estimate pixels at ±Inf: counted as missing, and said so
     for (const std::string& stamp : est) {
       if (!gt.count(stamp)) continue;
       const std::string name = "curvature/" + stamp + ".npy";
@@ -105,13 +106,19 @@ int run_curvature(int argc, char** argv) {
       if (!acc) acc.emplace(support_radius(support, truth.width()));
       const std::string est_file = (fs::path(args.get("est")) / name).string();
       try {
-        acc->add(truth, read_curvature_npy(est_file));
+        const CurvatureImage estimate = read_curvature_npy(est_file);
+        for (const Eigen::Vector2f& k : estimate)
+          infinite += k.array().isInf().any() ? 1 : 0;
+        acc->add(truth, estimate);
       } catch (const InputError& e) {  // name the map, not only the problem (once)
         const std::string what = e.what();
         if (what.rfind(est_file + ": ", 0) == 0) throw;
         throw InputError(est_file + ": " + what);
       }
     }
+    if (infinite > 0)
+      std::cerr << "jpcr_eval curvature: warning: " << infinite << " pixels of " << args.get("est")
+                << " are +-Inf; they count as missing (a map marks invalid pixels with NaN)\n";
     const CurvatureErrors e = acc ? acc->result() : CurvatureErrors{};
     if (e.frames == 0)
       throw InputError(args.get("est") + ": no curvature map shares a stamp with " +
