@@ -1,6 +1,7 @@
 #include "jpcr/io/staged_output.hpp"
 
 #include <signal.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -55,9 +56,16 @@ StagedOutput::StagedOutput(std::string target, std::vector<std::string> layout)
     throw InputError(target_ + ": output path exists and is not a directory");
   fs::path t = fs::path(target_).lexically_normal();
   if (t.filename().empty()) t = t.parent_path();  // "out/" → "out"
-  const fs::path parent = t.has_parent_path() ? t.parent_path() : fs::path(".");
+  fs::path parent = t.has_parent_path() ? t.parent_path() : fs::path(".");
   ensure_directory(parent.string());
-  // A hidden sibling: renames into the target stay on one file system.
+  // A hidden sibling, so that renames into the target stay on one file system; inside the
+  // target when that is another file system (a mount point, a link to another disk), where a
+  // sibling would fail only at commit(), after the whole run.
+  struct stat target_stat {
+  }, parent_stat{};
+  if (::stat(t.c_str(), &target_stat) == 0 && ::stat(parent.c_str(), &parent_stat) == 0 &&
+      target_stat.st_dev != parent_stat.st_dev)
+    parent = t;
   const std::string prefix = "." + t.filename().string() + ".partial-";
   remove_abandoned_staging(parent, prefix, t);
   for (const std::string& name : layout_)

@@ -234,6 +234,35 @@ TEST(RequireOutputFileApartFrom, RefusesTheInputsOwnFilesThroughLinksAndAllowsNe
   EXPECT_FALSE(refused(dir.file("data_copy.txt"), data));
 }
 
+// An OUT on another file system than its parent (a mount point; here a small tmpfs, as root):
+// the staging directory goes inside it, so that commit()'s renames do not fail with EXDEV.
+TEST(StagedOutput, ATargetOnAnotherFileSystemIsStagedInsideIt) {
+  test::TempDir dir;
+  const std::string target = dir.file("mounted");
+  fs::create_directories(target);
+  if (::geteuid() != 0 ||
+      std::system(("mount -t tmpfs -o size=1m tmpfs '" + target + "' 2>/dev/null").c_str()) != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs here";
+  write(target + "/report.json", "an earlier run's");
+  std::string staging, error;
+  try {
+    StagedOutput out(target, {"report.json"});
+    staging = out.directory();
+    write(out.path("report.json"), "this run's");
+    out.commit();
+  } catch (const std::exception& e) {  // unmount below whatever happens
+    error = e.what();
+  }
+  const bool inside = fs::path(staging).parent_path() == fs::path(target);
+  const std::string report = read_file(target + "/report.json");
+  const bool staging_left = fs::exists(staging);
+  [[maybe_unused]] const int ignored = std::system(("umount '" + target + "'").c_str());
+  EXPECT_EQ(error, "");
+  EXPECT_TRUE(inside) << staging;
+  EXPECT_EQ(report, "this run's");
+  EXPECT_FALSE(staging_left);
+}
+
 TEST(StagedOutput, LayoutNamesArePlainVisibleFileNames) {
   test::TempDir dir;
   for (const char* name : {".previous", "", "a/b"})
