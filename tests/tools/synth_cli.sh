@@ -86,6 +86,9 @@ expect 0 "wrote 1 frames" -- "$synth" --frames 1 --size 80x60 --out "$tmp/rail" 
 n=$(ls "$tmp/rail/depth" | wc -l)
 [ "$n" = 1 ] || { echo "FAIL: --force left $n depth frames (the earlier sequence's mixed in)"; fail=1; }
 expect 2 "--out needs a non-empty value" -- "$synth" --frames 1 --out ""
+# An option given twice is refused, both values quoted, and nothing is written.
+expect 2 "--frames is given twice ('1', then '2')" -- "$synth" --frames 1 --out "$tmp/twice" --frames=2
+[ -e "$tmp/twice" ] && { echo "FAIL: output written after a usage error"; fail=1; }
 expect 2 "each 1-16384" -- "$synth" --size 4294967376x60 --out "$tmp/x"
 # Timestamps that collide at 1 us stop the run before anything is written.
 printf 'synthetic:

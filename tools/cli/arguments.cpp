@@ -66,6 +66,13 @@ bool Arguments::parse(int argc, char** argv, int first) {
       }
       // An empty value is never meant: --out "" would write into the working directory.
       if (value.empty()) throw UsageError("--" + name + " needs a non-empty value");
+      // Which of two values was meant is a guess, and a silent last-one-wins hides typos in
+      // long command lines and scripts that append overrides.
+      const auto earlier = values_.find(name);
+      if (earlier != values_.end()) {
+        throw UsageError("--" + name + " is given twice ('" + earlier->second + "', then '" +
+                         value + "'); give it once");
+      }
       values_[name] = value;
       continue;
     }
