@@ -17,6 +17,8 @@
 #include <string>
 #include <vector>
 
+#include "jpcr/quadric/error.hpp"
+
 namespace jpcr {
 
 class StagedOutput {
@@ -35,6 +37,18 @@ class StagedOutput {
   /// `message` with the staging directory's path replaced by the target's: for the errors of
   /// writes into the staging directory (a full disk), since the user knows the target (--out).
   std::string as_target(std::string message) const;
+
+  /// Runs `write_staged()`, which writes into the staging directory, and re-throws its
+  /// InputError as an `Error` whose message names the target (as_target). A program picks
+  /// `Error` when a write failure must not be mistaken for one of its other input errors.
+  template <class Error = InputError, class Write>
+  void write(Write&& write_staged) const {
+    try {
+      write_staged();
+    } catch (const InputError& e) {
+      throw Error(as_target(e.what()));
+    }
+  }
 
   /// The staging directory, and a path inside it.
   const std::string& directory() const { return staging_; }

@@ -53,6 +53,27 @@ TEST(StagedOutput, ErrorsOfWritesIntoTheStagingDirectoryCanNameTheTarget) {
   EXPECT_EQ(out.as_target("no path here"), "no path here");
 }
 
+TEST(StagedOutput, WriteRethrowsAFailedWriteNamedByTheTargetAsTheErrorAsked) {
+  struct WriteFailure : InputError {
+    using InputError::InputError;
+  };
+  test::TempDir dir;
+  const std::string target = dir.file("run");
+  const StagedOutput out(target, {"summary.json"});
+  const auto fail = [&] { throw InputError(out.path("summary.json") + ": write failed"); };
+  try {
+    out.write<WriteFailure>(fail);
+    ADD_FAILURE() << "no exception";
+  } catch (const WriteFailure& e) {
+    EXPECT_STREQ(e.what(), (target + "/summary.json: write failed").c_str());
+  }
+  EXPECT_THROW(out.write(fail), InputError);
+  EXPECT_THROW(out.write([] { throw std::logic_error("not a write error"); }), std::logic_error);
+  bool ran = false;
+  out.write([&] { ran = true; });
+  EXPECT_TRUE(ran);
+}
+
 TEST(StagedOutput, AFailedRunLeavesTheTargetAsItWas) {
   test::TempDir dir;
   const std::string target = dir.file("run");

@@ -155,11 +155,7 @@ int run(int argc, char** argv) {
                   << "): no valid curvature (" << record.summary.no_centre << " of "
                   << record.summary.pixels << " pixels without depth)\n";
       }
-      try {
-        writer.write(record.stamp, map, vertices);
-      } catch (const InputError& e) {  // e.g. a full disk: name OUT, not the staging directory
-        throw InputError(out.as_target(e.what()));
-      }
+      out.write([&] { writer.write(record.stamp, map, vertices); });
       std::ostringstream extra;
       extra.precision(3);
       extra << "valid " << 100.0 * record.summary.valid / record.summary.pixels << " %  "
@@ -167,11 +163,8 @@ int run(int argc, char** argv) {
       records.push_back(record);
       progress(i - range.first + 1, range.last - range.first, extra.str());
     }
-    try {
-      write_summary(out.path("summary.json"), args.get("dataset"), *estimator, records);
-    } catch (const InputError& e) {
-      throw InputError(out.as_target(e.what()));
-    }
+    out.write(
+        [&] { write_summary(out.path("summary.json"), args.get("dataset"), *estimator, records); });
     out.commit();
     std::cout << "wrote " << records.size() << " curvature maps to " << out.target() << '\n';
     return 0;

@@ -132,12 +132,10 @@ int run_main(int argc, char** argv) {
           (void)k;
           (void)self;
           // The vertex map is only needed for the PLY; compute_vertex_map is cheap next to J-ftf.
-          try {
+          out.write<OutputError>([&] {  // e.g. a full disk: named by OUT, not by the dataset
             writer.write(format_stamp(frame.timestamp), quadrics,
                          compute_vertex_map(frame.depth, frame.camera));
-          } catch (const InputError& e) {  // e.g. a full disk: name OUT, not the staging directory
-            throw OutputError(out.as_target(e.what()));
-          }
+          });
         },
         refiners);
     self = &runner;
@@ -186,7 +184,7 @@ int run_main(int argc, char** argv) {
         gt.push_back({dataset->timestamp(i), *T});
     const auto front_errors = run::evaluate(gt, runner.front_end_trajectory());
     const auto errors = run::evaluate(gt, refined);
-    try {
+    out.write([&] {
       write_trajectory(out.path("trajectory.txt"), refined);
       write_file_atomically(out.path("verdicts.txt"),
                             [&](std::ostream& o) { run::write_verdicts(o, runner); });
@@ -195,9 +193,7 @@ int run_main(int argc, char** argv) {
       write_file_atomically(out.path("report.json"), [&](std::ostream& o) {
         run::write_report(o, args.get("dataset"), runner, front_errors, errors, progress.seconds());
       });
-    } catch (const InputError& e) {  // e.g. a full disk: name OUT, not the staging directory
-      throw InputError(out.as_target(e.what()));
-    }
+    });
     out.commit();
     std::cout << "wrote " << refined.size() << " poses, " << runner.keyframes().size()
               << " keyframes and " << writer.written() << " curvature maps to " << out.target()
