@@ -27,7 +27,10 @@ void cuda_check(int code, const char* call, const char* file, int line) {
 
 void cuda_check_launch(const char* kernel, CUstream_st* stream, const char* file, int line) {
   cudaError_t error = cudaGetLastError();
-  if (error == cudaSuccess && cuda_synchronous_checks()) error = cudaStreamSynchronize(stream);
+  if (error == cudaSuccess && cuda_synchronous_checks()) {
+    error = cudaStreamSynchronize(stream);
+    if (error != cudaSuccess) cudaGetLastError();  // not blamed on the next launch as well
+  }
   if (error != cudaSuccess) throw_cuda_error(error, std::string("kernel ") + kernel, file, line);
 }
 

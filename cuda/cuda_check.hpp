@@ -21,7 +21,9 @@ void cuda_check(int code, const char* call, const char* file, int line);
 
 /// After a kernel launch on `stream`: the launch error (cudaGetLastError) and, when synchronous
 /// checking is on, the kernel's own error (cudaStreamSynchronize: this stream only, so another
-/// thread's work on the device neither waits nor is blamed).
+/// thread's work on the device neither waits nor is blamed). The runtime keeps the last error per
+/// thread: an error of the caller's own CUDA work that its thread left unread is reported here as
+/// the launch's (and read).
 void cuda_check_launch(const char* kernel, CUstream_st* stream, const char* file, int line);
 
 /// Synchronous checking: on in debug builds (no NDEBUG) and when JPCR_CUDA_SYNC=1 (the GPU

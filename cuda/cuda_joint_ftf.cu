@@ -299,6 +299,7 @@ void check_pair(const std::vector<VertexMap>& frames, std::size_t poses, std::si
 void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
                            const NeighbourhoodPattern& pattern, JointState initial) {
   check_pair(frames, initial.poses.size(), initial.quadrics.size(), initial.valid.size());
+  const DeviceScope scope(device_->device);
   state_ = std::move(initial);
   upload(frames, camera, pattern);
 }
@@ -307,6 +308,7 @@ void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraInt
                            const NeighbourhoodPattern& pattern,
                            const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& initial) {
   check_pair(frames, poses.size(), initial.status.size(), initial.status.size());
+  const DeviceScope scope(device_->device);
   fill_joint_state(poses, initial, state_);
   upload(frames, camera, pattern);
 }
@@ -321,6 +323,7 @@ void CudaJointSystem::upload(const std::vector<VertexMap>& frames, const CameraI
     Device& d = *device_;
     d.width = d.height = 0;
     d.pattern_size = 0;
+    linearized_ = proposed_ = false;
     state_ = JointState{};
     candidate_poses_.clear();
     throw;
@@ -332,6 +335,8 @@ void CudaJointSystem::copy_to_device(const std::vector<VertexMap>& frames,
                                      const NeighbourhoodPattern& pattern) {
   const std::size_t pixels = frames[0].size();
   Device& d = *device_;
+  const DrainOnUnwind drain(d.stream);
+  linearized_ = proposed_ = false;
   d.width = frames[0].width();
   d.height = frames[0].height();
   d.pattern_size = static_cast<int>(pattern.offsets.size());
@@ -365,12 +370,16 @@ void CudaJointSystem::launch_linearize(double lambda) {
 
 ReducedSystem CudaJointSystem::linearize(double lambda) {
   Device& d = *device_;
+  const DeviceScope scope(d.device);
+  const DrainOnUnwind drain(d.stream);
   const cudaStream_t stream = d.stream;
+  linearized_ = proposed_ = false;
   if (d.pixels() == 0) {  // an empty frame (or nothing loaded): no quadric takes part
     ReducedSystem none;
     none.S = Eigen::MatrixXd::Zero(6, 6);
     none.s = none.A_diagonal = Eigen::VectorXd::Zero(6);
     none.seen = {0};
+    linearized_ = true;
     return none;
   }
   d.record(0);
@@ -400,6 +409,7 @@ ReducedSystem CudaJointSystem::linearize(double lambda) {
   out.terms = static_cast<long>(t[kTerms]);  // exact: integers far below 2⁵³
   out.active = static_cast<int>(t[kActive]);
   out.seen = {static_cast<int>(t[kSeen])};
+  linearized_ = true;
   return out;
 }
 
@@ -420,16 +430,22 @@ double CudaJointSystem::propose(const ReducedSystem& /*system*/, double /*lambda
                                 const std::vector<Vector6d>& pose_steps) {
   if (pose_steps.size() != 1)
     throw std::invalid_argument("CudaJointSystem: J-ftf has exactly one pose step");
-  if (state_.poses.size() != 2)
-    throw std::logic_error("CudaJointSystem: propose() before a pair was loaded");
+  if (state_.poses.size() != 2 || !linearized_)
+    throw std::logic_error("CudaJointSystem: propose() before linearize() of a loaded pair");
   // T ← exp(Δξ^) T, re-orthonormalised, as JointSystem::step; the factors are those of the last
   // linearize (the loop of joint_problem.hpp always proposes from the latest linearisation).
   Eigen::Isometry3d T = se3_exp(pose_steps[0]) * state_.poses[1];
   T.linear() = orthonormalize(T.linear());
   candidate_poses_ = {Eigen::Isometry3d::Identity(), T};
   Device& d = *device_;
+  const DeviceScope scope(d.device);
+  const DrainOnUnwind drain(d.stream);
   const cudaStream_t stream = d.stream;
-  if (d.pixels() == 0) return 0.0;
+  proposed_ = false;
+  if (d.pixels() == 0) {
+    proposed_ = true;
+    return 0.0;
+  }
   d.record(2);
   if (poison_) {
     poison(d.candidate, d.pixels(), stream);
@@ -443,10 +459,15 @@ double CudaJointSystem::propose(const ReducedSystem& /*system*/, double /*lambda
   d.record(3);
   JPCR_CUDA_CHECK(cudaStreamSynchronize(stream));
   timing_.propose_ms = d.elapsed_ms(2, 3);
+  proposed_ = true;
   return d.host_totals[0];
 }
 
 void CudaJointSystem::accept() {
+  if (!proposed_) throw std::logic_error("CudaJointSystem: accept() without a propose()");
+  // The candidate buffer now holds the replaced quadrics, and the factors are the replaced
+  // state's: the next propose() needs a fresh linearize().
+  linearized_ = proposed_ = false;
   std::swap(device_->quadrics, device_->candidate);
   state_.poses = candidate_poses_;
   host_quadrics_fresh_ = false;
@@ -455,6 +476,8 @@ void CudaJointSystem::accept() {
 const JointState& CudaJointSystem::state() {
   if (!host_quadrics_fresh_) {
     Device& d = *device_;
+    const DeviceScope scope(d.device);
+    const DrainOnUnwind drain(d.stream);
     state_.quadrics.resize(d.pixels());
     JPCR_CUDA_CHECK(cudaMemcpyAsync(state_.quadrics.data(), d.quadrics.data(),
                                     d.pixels() * sizeof(Quadricd), cudaMemcpyDeviceToHost,
@@ -466,7 +489,10 @@ const JointState& CudaJointSystem::state() {
 }
 
 JointState CudaJointSystem::candidate() {
+  if (!proposed_) throw std::logic_error("CudaJointSystem: candidate() without a propose()");
   Device& d = *device_;
+  const DeviceScope scope(d.device);
+  const DrainOnUnwind drain(d.stream);
   JointState c;
   c.poses = candidate_poses_;
   c.valid = state_.valid;
@@ -478,7 +504,10 @@ JointState CudaJointSystem::candidate() {
 }
 
 std::vector<PairFactors> CudaJointSystem::factors() {
+  if (!linearized_) throw std::logic_error("CudaJointSystem: factors() without a linearize()");
   Device& d = *device_;
+  const DeviceScope scope(d.device);
+  const DrainOnUnwind drain(d.stream);
   const std::size_t pixels = d.pixels();
   std::vector<unsigned char> active(pixels);
   const std::size_t scalar = precision_ == CudaPrecision::kDouble ? sizeof(double) : sizeof(float);

@@ -90,6 +90,9 @@ class CudaJointSystem final : public JointProblem {
   std::unique_ptr<Device> device_;
   JointState state_;  // poses and valid on the host; quadrics when fresh
   bool host_quadrics_fresh_ = false;
+  // What the device buffers hold: the factors of a linearize() of the current state, and a
+  // candidate of a propose() from them (propose, accept and candidate check these).
+  bool linearized_ = false, proposed_ = false;
   std::vector<Eigen::Isometry3d> candidate_poses_;
   CudaJointTiming timing_;
   bool poison_ = false;

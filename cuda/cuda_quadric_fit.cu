@@ -217,6 +217,8 @@ QuadricMap CudaQuadricFit::fit(const VertexMap& vertices, const NormalMap* norma
 
   std::lock_guard<std::mutex> lock(mutex_);
   Device& d = *device_;
+  const DeviceScope scope(d.device);
+  const DrainOnUnwind drain(d.stream);
   d.reserve(pixels, pattern_size);
   const cudaStream_t stream = d.stream;
   d.record(0);

@@ -7,7 +7,8 @@
 namespace jpcr {
 
 /// One cudaMalloc'ed block. reserve() grows it only when asked for more bytes than it holds, so
-/// a buffer sized for the first frame is reused by every later frame of that size.
+/// a buffer sized for the first frame is reused by every later frame of that size. The block is
+/// allocated on the calling thread's current device and freed on that device.
 class DeviceMemory {
  public:
   DeviceMemory() = default;
@@ -27,6 +28,7 @@ class DeviceMemory {
  private:
   void* data_ = nullptr;
   std::size_t bytes_ = 0;
+  int device_ = 0;  // where data_ lives
 };
 
 /// A typed view of DeviceMemory: `count` elements of T.

@@ -1,5 +1,8 @@
 #include "jpcr/cuda/device_selection.hpp"
 
+#include <map>
+#include <mutex>
+
 #include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/quadric/error.hpp"
 
@@ -11,7 +14,9 @@ namespace jpcr {
 
 namespace {
 
-CudaDeviceInfo query_device_zero() {
+// What the runtime says about the calling thread's current device (device 0 unless the
+// program chose another): the device a jpcr GPU object built in this thread runs on.
+CudaDeviceInfo query_current_device() {
   CudaDeviceInfo info;
 #if defined(JPCR_HAVE_CUDA)
   int count = 0;
@@ -25,21 +30,24 @@ CudaDeviceInfo query_device_zero() {
     info.description = "cudaGetDeviceCount found 0 devices";
     return info;
   }
+  int device = 0;
   cudaDeviceProp prop{};
-  const cudaError_t prop_error = cudaGetDeviceProperties(&prop, 0);
+  cudaError_t prop_error = cudaGetDevice(&device);
+  if (prop_error == cudaSuccess) prop_error = cudaGetDeviceProperties(&prop, device);
   if (prop_error != cudaSuccess) {
     cudaGetLastError();
     info.description = cudaGetErrorName(prop_error);
     return info;
   }
   const std::string arch = "sm_" + std::to_string(prop.major) + std::to_string(prop.minor);
+  const std::string which = device == 0 ? "" : " (device " + std::to_string(device) + ")";
   // The kernels are built for sm_75 and newer (nvcc 13 has nothing older).
   if (prop.major < 7 || (prop.major == 7 && prop.minor < 5)) {
-    info.description = std::string(prop.name) + ", " + arch + " is older than sm_75";
+    info.description = std::string(prop.name) + ", " + arch + which + " is older than sm_75";
     return info;
   }
   info.available = true;
-  info.description = std::string(prop.name) + ", " + arch;
+  info.description = std::string(prop.name) + ", " + arch + which;
 #else
   info.description = "built without CUDA";
 #endif
@@ -68,8 +76,21 @@ std::string to_string(ComputeDevice device) {
 }
 
 const CudaDeviceInfo& query_cuda_device() {
-  static const CudaDeviceInfo info = query_device_zero();
-  return info;
+#if defined(JPCR_HAVE_CUDA)
+  int device = 0;
+  if (cudaGetDevice(&device) != cudaSuccess) {
+    cudaGetLastError();
+    device = -1;  // no driver or no device: described by query_current_device
+  }
+#else
+  const int device = -1;
+#endif
+  static std::mutex mutex;
+  static std::map<int, CudaDeviceInfo> known;  // node-based: references stay valid
+  const std::lock_guard<std::mutex> lock(mutex);
+  const auto found = known.find(device);
+  if (found != known.end()) return found->second;
+  return known.emplace(device, query_current_device()).first->second;
 }
 
 bool cuda_device_available() {

@@ -14,7 +14,9 @@ enum class ComputeDevice { kAuto, kCpu, kCuda };
 ComputeDevice parse_compute_device(const std::string& text);
 std::string to_string(ComputeDevice device);
 
-/// What cudaGetDeviceCount and cudaGetDeviceProperties say about device 0.
+/// What cudaGetDeviceCount and cudaGetDeviceProperties say about the calling thread's current
+/// device (device 0 unless the program chose another with cudaSetDevice): the device a jpcr GPU
+/// object built in that thread keeps using, whichever device is current when it is called.
 struct CudaDeviceInfo {
   bool available = false;
   /// "NVIDIA H100 80GB HBM3, sm_90" when available; otherwise why not, e.g. "cudaErrorNoDevice"
@@ -22,8 +24,8 @@ struct CudaDeviceInfo {
   std::string description;
 };
 
-/// Queried once per process. Errors (no driver: 35, no device: 100, ...) mean "no GPU", never a
-/// throw.
+/// Queried once per process and device. Errors (no driver: 35, no device: 100, ...) mean "no
+/// GPU", never a throw.
 const CudaDeviceInfo& query_cuda_device();
 bool cuda_device_available();
 

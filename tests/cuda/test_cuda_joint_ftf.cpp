@@ -15,6 +15,10 @@
 #include <cmath>
 #include <cstdio>
 #include <sstream>
+#include <thread>
+#include <utility>
+
+#include <cuda_runtime_api.h>
 
 #include <gtest/gtest.h>
 
@@ -102,8 +106,11 @@ TEST(CudaJointFrameToFrame, OneIterationEqualsTheCpuReference) {
   const std::uint64_t seed = announce_seed();
   const JointParams params;
   const double lambda = params.initial_damping;
-  for (std::uint64_t k = 0; k < 2; ++k) {
-    const test::RandomPair pair = test::random_pair(seed + k, 320, 240);
+  // 317x239: thread blocks cut by the image's right and bottom edges.
+  const std::pair<int, int> sizes[] = {{320, 240}, {320, 240}, {317, 239}};
+  for (std::uint64_t k = 0; k < 3; ++k) {
+    const auto [width, height] = sizes[k];
+    const test::RandomPair pair = test::random_pair(seed + k, width, height);
     const NeighbourhoodPattern pattern = params.quadric.pattern.for_width(pair.camera.width);
     const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
     const JointState state =
@@ -137,7 +144,7 @@ TEST(CudaJointFrameToFrame, OneIterationEqualsTheCpuReference) {
         relative(gpu_lin.A_diagonal, cpu_lin.A_diagonal), relative(gpu_lin.cost, cpu_lin.cost),
         rel_step, relative(gpu_cost, cpu_step.cost), rms, gpu.last_timing().linearize_ms,
         gpu.last_timing().propose_ms);
-    EXPECT_GT(cpu_lin.active, 320 * 240 / 8) << "seed " << seed + k;
+    EXPECT_GT(cpu_lin.active, width * height / 8) << "seed " << seed + k;
     EXPECT_EQ(gpu_lin.active, cpu_lin.active) << "seed " << seed + k;
     EXPECT_EQ(gpu_lin.seen, cpu_lin.seen) << "seed " << seed + k;
     EXPECT_EQ(gpu_lin.terms, cpu_lin.terms) << "seed " << seed + k;
@@ -292,6 +299,72 @@ TEST(CudaJointFrameToFrame, ProposeBeforeLoadIsALogicError) {
   SKIP_WITHOUT_GPU();
   CudaJointSystem gpu(JointParams{}.terms(true));
   EXPECT_THROW(gpu.propose(ReducedSystem{}, 0.0, {Vector6d::Zero()}), std::logic_error);
+}
+
+// The device buffers hold factors only after linearize() and a candidate only after propose():
+// out of that order the calls are logic errors, not reads of another pair's leftovers.
+TEST(CudaJointFrameToFrame, CallsOutOfTheLinearizeProposeAcceptOrderAreLogicErrors) {
+  SKIP_WITHOUT_GPU();
+  const test::RandomPair pair = test::random_pair(announce_seed(), 160, 120);
+  const JointParams params;
+  const NeighbourhoodPattern pattern = params.quadric.pattern.for_width(pair.camera.width);
+  const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
+  CudaJointSystem gpu(params.terms(true));
+  gpu.load(pair.vertices, pair.camera, pattern, {Eigen::Isometry3d::Identity(), pair.start},
+           initial);
+  EXPECT_THROW(gpu.propose(ReducedSystem{}, 0.0, {Vector6d::Zero()}), std::logic_error);
+  EXPECT_THROW(gpu.factors(), std::logic_error);
+  EXPECT_THROW(gpu.candidate(), std::logic_error);
+  EXPECT_THROW(gpu.accept(), std::logic_error);
+  const ReducedSystem lin = gpu.linearize(params.initial_damping);
+  EXPECT_FALSE(gpu.factors().empty());
+  EXPECT_THROW(gpu.accept(), std::logic_error);
+  gpu.propose(lin, params.initial_damping, {Vector6d::Zero()});
+  EXPECT_EQ(gpu.candidate().quadrics.size(), pair.vertices[0].size());
+  gpu.accept();
+  // The factors were the replaced state's.
+  EXPECT_THROW(gpu.propose(lin, params.initial_damping, {Vector6d::Zero()}), std::logic_error);
+  EXPECT_THROW(gpu.accept(), std::logic_error);
+}
+
+// A refiner keeps the device it was built on: called from another thread (whose current device
+// is the default, 0) or, with two GPUs, with device 1 made current, it gives the same result
+// and leaves the caller's current device as it was.
+TEST(CudaJointFrameToFrame, KeepsItsDeviceWhateverDeviceTheCallerHasCurrent) {
+  SKIP_WITHOUT_GPU();
+  const test::RandomPair pair = test::random_pair(announce_seed(), 160, 120);
+  JointParams params;
+  params.max_iterations = 3;
+  const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
+  const std::vector<Eigen::Isometry3d> start = {Eigen::Isometry3d::Identity(), pair.start};
+  int built_on = -1;
+  ASSERT_EQ(cudaGetDevice(&built_on), cudaSuccess);
+  const CudaJointFrameToFrame refiner(params);
+  const RefinementResult here = refiner.refine(pair.vertices, pair.camera, start, initial);
+  RefinementResult there;
+  std::string thread_error;
+  std::thread([&] {
+    try {
+      there = refiner.refine(pair.vertices, pair.camera, start, initial);
+    } catch (const std::exception& e) {
+      thread_error = e.what();
+    }
+  }).join();
+  ASSERT_TRUE(thread_error.empty()) << thread_error;
+  EXPECT_TRUE(there.poses[1].isApprox(here.poses[1], 0.0));
+  EXPECT_EQ(there.report.iterations, here.report.iterations);
+  int count = 0;
+  ASSERT_EQ(cudaGetDeviceCount(&count), cudaSuccess);
+  if (count < 2) GTEST_SKIP() << "one CUDA device: the other-device half needs two";
+  const int other = built_on == 0 ? 1 : 0;
+  ASSERT_EQ(cudaSetDevice(other), cudaSuccess);
+  const RefinementResult elsewhere = refiner.refine(pair.vertices, pair.camera, start, initial);
+  int current = -1;
+  ASSERT_EQ(cudaGetDevice(&current), cudaSuccess);
+  ASSERT_EQ(cudaSetDevice(built_on), cudaSuccess);
+  EXPECT_EQ(current, other);
+  EXPECT_TRUE(elsewhere.poses[1].isApprox(here.poses[1], 0.0));
+  EXPECT_EQ(elsewhere.report.verdict, here.report.verdict);
 }
 
 TEST(CudaJointFrameToFrame, AnEmptyPairHasTooFewQuadricsAsOnTheCpu) {
