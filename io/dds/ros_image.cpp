@@ -3,8 +3,12 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <list>
+#include <mutex>
 #include <stdexcept>
 #include <string>
+#include <unordered_map>
+#include <utility>
 
 #include "jpcr/quadric/error.hpp"
 
@@ -57,9 +61,52 @@ RosImageBuffer empty_buffer(int width, int height, const char* encoding, std::si
   return b;
 }
 
+// The stamps to_seconds converted, keyed by the double it returned; the least recently used is
+// forgotten first, so the keyframes that every path message stamps again stay.
+class StampMemory {
+ public:
+  void remember(double seconds, const RosStamp& stamp) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const auto found = index_.find(seconds);
+    if (found != index_.end()) {
+      found->second->second = stamp;  // the latest of two stamps a double cannot tell apart
+      order_.splice(order_.begin(), order_, found->second);
+      return;
+    }
+    order_.emplace_front(seconds, stamp);
+    index_.emplace(seconds, order_.begin());
+    if (order_.size() > kRememberedStamps) {
+      index_.erase(order_.back().first);
+      order_.pop_back();
+    }
+  }
+
+  bool recall(double seconds, RosStamp& stamp) {
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const auto found = index_.find(seconds);
+    if (found == index_.end()) return false;
+    order_.splice(order_.begin(), order_, found->second);
+    stamp = found->second->second;
+    return true;
+  }
+
+ private:
+  using Entries = std::list<std::pair<double, RosStamp>>;
+  std::mutex mutex_;
+  Entries order_;  // most recently used first
+  std::unordered_map<double, Entries::iterator> index_;
+};
+
+StampMemory& stamp_memory() {
+  static StampMemory memory;
+  return memory;
+}
+
 }  // namespace
 
 RosStamp to_ros_stamp(double seconds) {
+  RosStamp remembered;
+  if (stamp_memory().recall(seconds, remembered)) return remembered;
   const double whole = std::floor(seconds);
   long long nanosec = std::llround((seconds - whole) * kNanosecondsPerSecond);
   long long sec = static_cast<long long>(whole);
@@ -74,8 +121,10 @@ RosStamp to_ros_stamp(double seconds) {
 }
 
 double to_seconds(const RosStamp& stamp) {
-  return static_cast<double>(stamp.sec) +
-         static_cast<double>(stamp.nanosec) / kNanosecondsPerSecond;
+  const double seconds =
+      static_cast<double>(stamp.sec) + static_cast<double>(stamp.nanosec) / kNanosecondsPerSecond;
+  stamp_memory().remember(seconds, stamp);
+  return seconds;
 }
 
 RosImageView RosImageBuffer::view() const {

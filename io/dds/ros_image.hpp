@@ -27,9 +27,15 @@ struct RosStamp {
   std::uint32_t nanosec = 0;
 };
 
-/// Seconds to sec + nanosec, rounded to the nearest nanosecond.
+/// Seconds to sec + nanosec. A double holds a stamp of today (about 1.7e9 s) only to about
+/// 240 ns, so the stamps that to_seconds converted are remembered (the kRememberedStamps most
+/// recently used, process-wide, thread-safe) and come back exactly: what jpcr publishes for a
+/// received frame carries that frame's header stamp to the nanosecond, as ROS's exact-time
+/// synchronisation and tf lookups need. Any other value is rounded to the nearest nanosecond.
 RosStamp to_ros_stamp(double seconds);
+/// sec + nanosec in seconds; remembered for to_ros_stamp.
 double to_seconds(const RosStamp& stamp);
+constexpr std::size_t kRememberedStamps = std::size_t{1} << 16;  // 36 min of frames at 30 Hz
 
 /// The fields of a received sensor_msgs/Image; `data` is borrowed.
 struct RosImageView {

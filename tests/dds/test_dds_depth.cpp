@@ -11,6 +11,8 @@
 #include "dds_test_config.hpp"
 #include "jpcr/io/dds/dds_depth_publisher.hpp"
 #include "jpcr/io/dds/dds_depth_subscriber.hpp"
+#include "jpcr/io/dds/dds_endpoint.hpp"
+#include "jpcr/io/dds/dds_result_publisher.hpp"
 #include "jpcr/io/dds/ros_messages.hpp"
 
 namespace jpcr {
@@ -78,6 +80,49 @@ TEST_F(DdsDepth, FrameArrivesIdenticalIn16UC1And32FC1) {
   EXPECT_EQ(log.str(), "jpcr dds: " + config_.camera_info_topic +
                            ": the camera has lens distortion, which is not applied: the depth is "
                            "used as received and must be rectified (an image_rect topic)\n");
+}
+
+// A camera's stamp of today (1.7e9 s) with nanoseconds a double cannot hold: the odometry jpcr
+// publishes for that frame carries the same stamp, to the nanosecond, as ROS's exact-time sync
+// and tf lookups at the image's stamp need (rounding the double gave 1733400000.000000000).
+TEST_F(DdsDepth, ResultsForAFrameCarryItsStampToTheNanosecond) {
+  std::ostringstream log;
+  DdsDepthSubscriber subscriber(node_side_, config_, &log);
+  const DdsWriter<RosCameraInfoMsg> info_writer(camera_side_, config_.camera_info_topic,
+                                                config_.camera_info_qos());
+  const DdsWriter<RosImage> depth_writer(camera_side_, config_.depth_topic, config_.depth_qos());
+  ASSERT_TRUE(depth_writer.wait_matched(1, kTimeout) && info_writer.wait_matched(1, kTimeout));
+  Frame sent = test_frame(0.0);
+  sent.camera.distortion = {};
+  const RosStamp stamp{1733400000, 1};
+  // The messages borrow their strings and data from these.
+  const RosCameraInfo info_values = encode_camera_info(sent.camera);
+  const RosImageBuffer depth_values = encode_depth_image(sent.depth, DepthEncoding::kMetres32);
+  RosCameraInfoMsg info = camera_info_message(info_values, 0.0, config_.camera_frame_id);
+  RosImage depth = image_message(depth_values, 0.0, config_.camera_frame_id);
+  info.header.stamp = {stamp.sec, stamp.nanosec};
+  depth.header.stamp = {stamp.sec, stamp.nanosec};
+  info_writer.write(info);
+  depth_writer.write(depth);
+  const std::optional<Frame> got = subscriber.wait_frame(kTimeout);
+  ASSERT_TRUE(got);
+
+  DdsResultPublisher results(node_side_, config_);
+  const DdsReader<RosOdometry> odometry(camera_side_,
+                                        result_topic_name(config_, ResultTopic::kOdometry),
+                                        result_topic_qos(config_, ResultTopic::kOdometry));
+  ASSERT_TRUE(odometry.wait_matched(1, kTimeout));
+  results.publish_odometry(StampedPose{got->timestamp, Eigen::Isometry3d::Identity()},
+                           Matrix6d::Identity());
+  std::optional<RosStamp> echoed;
+  const auto deadline = std::chrono::steady_clock::now() + kTimeout;
+  while (!echoed && std::chrono::steady_clock::now() < deadline) {
+    odometry.wait(milliseconds(100));
+    odometry.take([&](const RosOdometry& m) { echoed = stamp_of(m.header); });
+  }
+  ASSERT_TRUE(echoed);
+  EXPECT_EQ(echoed->sec, stamp.sec);
+  EXPECT_EQ(echoed->nanosec, stamp.nanosec);
 }
 
 TEST_F(DdsDepth, WaitFrameTimesOutWithoutPublisher) {

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <random>
 
 #include "input_error.hpp"
 #include "jpcr/io/dds/ros_image.hpp"
@@ -42,6 +43,40 @@ TEST(RosStamp, RoundTripsToTheNanosecond) {
   }
   EXPECT_EQ(to_ros_stamp(99.9999999996).sec, 100);
   EXPECT_EQ(to_ros_stamp(1.5).nanosec, 500000000u);
+}
+
+// A double resolves today's stamps (1.7e9 s) only to 238 ns: a received stamp must still come
+// back to the nanosecond, or ROS's exact-time sync and tf lookups miss what jpcr publishes.
+TEST(RosStamp, AReceivedStampComesBackExactly) {
+  std::mt19937_64 rng(20261205);
+  std::uniform_int_distribution<std::uint32_t> nanosec(0, 999999999);
+  int lost_by_rounding = 0;
+  for (int i = 0; i < 1000; ++i) {
+    const RosStamp s{1733400000 + i, nanosec(rng)};
+    const double seconds = to_seconds(s);
+    const RosStamp back = to_ros_stamp(seconds);
+    EXPECT_EQ(back.sec, s.sec);
+    EXPECT_EQ(back.nanosec, s.nanosec);
+    // What rounding the double alone gives: the nanoseconds are lost almost always.
+    const double whole = std::floor(seconds);
+    lost_by_rounding += std::llround((seconds - whole) * 1e9) != std::llround(s.nanosec);
+  }
+  EXPECT_GT(lost_by_rounding, 900);  // the case this guards (measured: 99.6 % of random stamps)
+}
+
+// The least recently used stamp is forgotten first, and a value never converted is rounded.
+TEST(RosStamp, TheMemoryKeepsTheStampsUsedLast) {
+  const RosStamp kept{1800000000, 123456789}, dropped{1800000001, 987654321};
+  const double kept_seconds = to_seconds(kept), dropped_seconds = to_seconds(dropped);
+  for (std::size_t i = 0; i < kRememberedStamps; ++i) {
+    to_seconds(RosStamp{static_cast<std::int32_t>(1900000000 + i), 1});
+    if (i % 1000 == 0) to_ros_stamp(kept_seconds);  // used again: stays
+  }
+  EXPECT_EQ(to_ros_stamp(kept_seconds).nanosec, kept.nanosec);
+  const RosStamp forgotten = to_ros_stamp(dropped_seconds);
+  EXPECT_EQ(forgotten.sec, dropped.sec);
+  EXPECT_NE(forgotten.nanosec, dropped.nanosec);  // 987654321 is not the double's nearest ns
+  EXPECT_NEAR(double(forgotten.nanosec), double(dropped.nanosec), 240.0);
 }
 
 TEST(RosImage, DepthRoundTripsIn16UC1AndIn32FC1) {
