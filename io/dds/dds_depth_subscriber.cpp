@@ -153,7 +153,7 @@ void DdsDepthSubscriber::process() {
         distortion_logged_ = true;
         *log_ << "jpcr dds: " << config_.camera_info_topic
               << ": the camera has lens distortion, which is not applied: the depth is used as"
-                 " received and must be rectified (an image_rect topic)"
+                 " received and must be rectified (an image_rect topic), with the intrinsics of P"
               << std::endl;
       }
     } else {

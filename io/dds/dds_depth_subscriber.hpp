@@ -9,7 +9,8 @@
 // (frames_dropped()) and logged, never lost silently in the reader's history.
 //
 // The depth is used as received: it must be rectified (a driver's image_rect topic; what
-// jpcr_dds_play publishes is). A camera_info with lens distortion D is logged once, as D is
+// jpcr_dds_play publishes is), and its intrinsics are the camera_info's P, the rectified
+// camera's (K when P is all zero). A camera_info with lens distortion D is logged once, as D is
 // not applied.
 #pragma once
 

@@ -1,5 +1,7 @@
 #include "jpcr/io/dds/ros_image.hpp"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -209,17 +211,28 @@ CameraIntrinsics decode_camera_info(const RosCameraInfo& info, const RosImageLim
   if (info.width > limits.max_side || info.height > limits.max_side) {
     reject("camera_info size exceeds the limit of " + std::to_string(limits.max_side) + " pixels");
   }
-  const auto& k = info.k;
-  for (const double v : k) {
-    if (!std::isfinite(v)) reject("camera_info K is not finite");
+  // The image is used as received, so it is the rectified one, whose camera is P's left 3x3
+  // (ROS: K and D describe the raw image, P the rectified one; P's Tx, Ty, the stereo baseline,
+  // do not change where a point of this camera's own frame projects). A camera_info without P
+  // (all zero) gives K.
+  const bool has_p = std::any_of(info.p.begin(), info.p.end(), [](double v) { return v != 0.0; });
+  const std::string name = has_p ? "P" : "K";
+  const auto& p = info.p;
+  const std::array<double, 9> k =
+      has_p ? std::array<double, 9>{p[0], p[1], p[2], p[4], p[5], p[6], p[8], p[9], p[10]} : info.k;
+  for (const double v :
+       has_p ? std::vector<double>(p.begin(), p.end()) : std::vector<double>(k.begin(), k.end())) {
+    if (!std::isfinite(v)) reject("camera_info " + name + " is not finite");
   }
   if (!(k[0] > 0.0) || !(k[4] > 0.0)) {
-    reject("camera_info focal lengths fx = " + std::to_string(k[0]) +
+    reject("camera_info " + name + " focal lengths fx = " + std::to_string(k[0]) +
            ", fy = " + std::to_string(k[4]) + " must be positive");
   }
   if (k[1] != 0.0 || k[3] != 0.0 || k[6] != 0.0 || k[7] != 0.0 || k[8] != 1.0) {
-    reject("camera_info K is not a pinhole matrix without skew [fx 0 cx; 0 fy cy; 0 0 1]");
+    reject("camera_info " + name + " is not a pinhole matrix without skew " +
+           (has_p ? "[fx 0 cx Tx; 0 fy cy Ty; 0 0 1 0]" : "[fx 0 cx; 0 fy cy; 0 0 1]"));
   }
+  if (has_p && p[11] != 0.0) reject("camera_info P is not a pinhole matrix (P[11] is not 0)");
   if (!(k[2] >= 0.0 && k[2] < info.width && k[5] >= 0.0 && k[5] < info.height)) {
     reject("camera_info principal point (" + std::to_string(k[2]) + ", " + std::to_string(k[5]) +
            ") lies outside the " + std::to_string(info.width) + "x" + std::to_string(info.height) +

@@ -101,10 +101,11 @@ std::size_t check_image_layout(
 /// become 0 (no measurement).
 DepthImage decode_depth_image(const RosImageView& image, const RosImageLimits& limits);
 
-/// Intrinsics from a CameraInfo: fx, fy, cx, cy from K; distortion from D ("plumb_bob" or
-/// "rational_polynomial" with zero terms beyond k3, or none). Throws InputError on a zero size,
-/// non-finite or non-positive focal lengths, a K that is not a pinhole matrix, binning, or an
-/// unsupported distortion.
+/// Intrinsics of the rectified image from a CameraInfo: fx, fy, cx, cy from P (from K when P is
+/// all zero, as an uncalibrated driver sends it); distortion from D ("plumb_bob" or
+/// "rational_polynomial" with zero terms beyond k3, or none), which jpcr does not apply. Throws
+/// InputError on a zero size, non-finite or non-positive focal lengths, a P or K that is not a
+/// pinhole matrix, binning, or an unsupported distortion.
 CameraIntrinsics decode_camera_info(const RosCameraInfo& info, const RosImageLimits& limits);
 
 /// A depth frame: the image decoded and checked against the camera's size. `camera.depth_scale`

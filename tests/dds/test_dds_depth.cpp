@@ -79,7 +79,8 @@ TEST_F(DdsDepth, FrameArrivesIdenticalIn16UC1And32FC1) {
   // The camera has lens distortion: one line, once, says that it is not applied.
   EXPECT_EQ(log.str(), "jpcr dds: " + config_.camera_info_topic +
                            ": the camera has lens distortion, which is not applied: the depth is "
-                           "used as received and must be rectified (an image_rect topic)\n");
+                           "used as received and must be rectified (an image_rect topic), "
+                           "with the intrinsics of P\n");
 }
 
 // A camera's stamp of today (1.7e9 s) with nanoseconds a double cannot hold: the odometry jpcr
@@ -172,7 +173,7 @@ TEST_F(DdsDepth, MalformedSamplesAreRejectedAndReceptionGoesOn) {
   send_bad([](RosImage& m, RosImageBuffer&) { m.is_bigendian = 1; });
   send_bad([](RosImage& m, RosImageBuffer&) { m.step = 10; });
   RosCameraInfo bad_info = info;
-  bad_info.k[0] = 0.0;
+  bad_info.p[0] = 0.0;
   infos.write(camera_info_message(bad_info, 1.0, frame_id));
   const Frame next = test_frame(2.0);
   const RosImageBuffer next_depth = encode_depth_image(next.depth, DepthEncoding::kMillimetres16);
@@ -192,7 +193,7 @@ TEST_F(DdsDepth, MalformedSamplesAreRejectedAndReceptionGoesOn) {
         "image_raw: rejected sample: unknown encoding 'yuv422'", "zero size 0x0",
         "claimed size step x height = 100000000 bytes exceeds the limit of 67108864",
         "big-endian data is not supported", "step 10 < width x 2 bytes = 640",
-        "camera_info: rejected sample: camera_info focal lengths fx = 0.000000"}) {
+        "camera_info: rejected sample: camera_info P focal lengths fx = 0.000000"}) {
     EXPECT_NE(text.find(expected), std::string::npos) << expected << "\nin:\n" << text;
   }
 }

@@ -209,8 +209,46 @@ TEST(RosCameraInfo, EncodeDecodeRoundTrip) {
   EXPECT_EQ(decode_camera_info(rational, {}).distortion, c.distortion);
 }
 
-TEST(RosCameraInfo, MalformedCameraInfoIsRejected) {
+// ROS: K and D describe the raw image, P the rectified one, which is what jpcr reads.
+TEST(RosCameraInfo, TheIntrinsicsComeFromPAndFromKWithoutP) {
+  RosCameraInfo info = encode_camera_info(small_camera(80, 60));
+  info.distortion_model = "plumb_bob";
+  info.d = {-0.3, 0.1, 0.0, 0.0, 0.0};
+  info.p = {280.0, 0.0, 40.25, -28.0, 0.0, 281.0, 30.75, 0.0, 0.0, 0.0, 1.0, 0.0};  // Tx = -f·B
+  const CameraIntrinsics rectified = decode_camera_info(info, {});
+  EXPECT_EQ(rectified.fx, 280.0);
+  EXPECT_EQ(rectified.fy, 281.0);
+  EXPECT_EQ(rectified.cx, 40.25);
+  EXPECT_EQ(rectified.cy, 30.75);
+  info.p = {};  // an uncalibrated driver's
+  const CameraIntrinsics raw = decode_camera_info(info, {});
+  EXPECT_EQ(raw.fx, 300.0);
+  EXPECT_EQ(raw.fy, 301.5);
+  EXPECT_EQ(raw.cx, 39.5);
+  EXPECT_EQ(raw.cy, 29.5);
+
   const RosCameraInfo good = encode_camera_info(small_camera(80, 60));
+  auto error = [&](auto&& mutate) {
+    RosCameraInfo i = good;
+    mutate(i);
+    return input_error_of([&] { decode_camera_info(i, {}); });
+  };
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.k[1] = 0.5; }), "<no error>");  // P is read, not K
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.p[0] = 0.0; }),
+            "camera_info P focal lengths fx = 0.000000, fy = 301.500000 must be positive");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.p[7] = std::nan(""); }), "camera_info P is not finite");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.p[1] = 0.5; }),
+            "camera_info P is not a pinhole matrix without skew [fx 0 cx Tx; 0 fy cy Ty; 0 0 1 0]");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.p[11] = 1.0; }),
+            "camera_info P is not a pinhole matrix (P[11] is not 0)");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.p[2] = 1e6; }),
+            "camera_info principal point (1000000.000000, 29.500000) lies outside the 80x60 "
+            "image");
+}
+
+TEST(RosCameraInfo, MalformedCameraInfoIsRejected) {
+  RosCameraInfo good = encode_camera_info(small_camera(80, 60));
+  good.p = {};  // K's checks: without P, K gives the intrinsics
   auto error = [&](auto&& mutate) {
     RosCameraInfo info = good;
     mutate(info);
@@ -218,9 +256,9 @@ TEST(RosCameraInfo, MalformedCameraInfoIsRejected) {
   };
   EXPECT_EQ(error([](RosCameraInfo&) {}), "<no error>");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.k[0] = 0.0; }),
-            "camera_info focal lengths fx = 0.000000, fy = 301.500000 must be positive");
+            "camera_info K focal lengths fx = 0.000000, fy = 301.500000 must be positive");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.k[4] = -5.0; }),
-            "camera_info focal lengths fx = 300.000000, fy = -5.000000 must be positive");
+            "camera_info K focal lengths fx = 300.000000, fy = -5.000000 must be positive");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.k[2] = std::nan(""); }), "camera_info K is not finite");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.k[8] = 0.0; }),
             "camera_info K is not a pinhole matrix without skew [fx 0 cx; 0 fy cy; 0 0 1]");
