@@ -310,8 +310,9 @@ ColorImage decode_rgb8_image(const RosImageView& image, const RosImageLimits& li
 RosImageBuffer encode_depth_image(const DepthImage& depth, DepthEncoding encoding) {
   if (encoding == DepthEncoding::kMetres32) {
     RosImageBuffer b = empty_buffer(depth.width(), depth.height(), "32FC1", 4);
+    constexpr float kNoMeasurement = std::numeric_limits<float>::quiet_NaN();  // REP 118
     for (const float z : depth)
-      append_bytes(b.data, (std::isfinite(z) && z > 0.0f) ? z : 0.0f);
+      append_bytes(b.data, (std::isfinite(z) && z > 0.0f) ? z : kNoMeasurement);
     return b;
   }
   RosImageBuffer b = empty_buffer(depth.width(), depth.height(), "16UC1", 2);

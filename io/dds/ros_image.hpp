@@ -120,7 +120,8 @@ ColorImage decode_rgb8_image(const RosImageView& image, const RosImageLimits& li
 
 /// Encoders for sending; little-endian, rows packed (step = width x bytes per pixel). Depth in
 /// 16UC1 is rounded to whole millimetres; depths that do not fit (not finite, <= 0, > 65.535 m)
-/// are sent as 0.
+/// are sent as 0. In 32FC1 a pixel without a measurement is NaN (REP 118: depth_image_proc
+/// takes 0 m as a measurement there).
 RosImageBuffer encode_depth_image(const DepthImage& depth, DepthEncoding encoding);
 RosImageBuffer encode_curvature_image(const Image<Eigen::Vector2f>& curvature);
 RosImageBuffer encode_rgb8_image(const ColorImage& color);

@@ -91,6 +91,14 @@ TEST(RosImage, DepthRoundTripsIn16UC1AndIn32FC1) {
     for (std::size_t i = 0; i < depth.size(); ++i)
       ASSERT_EQ(back[i], depth[i]) << to_string(e) << " pixel " << i;
   }
+  // No measurement: 0 in 16UC1, NaN in 32FC1 (REP 118).
+  ASSERT_EQ(depth(0, 0), 0.0f);
+  float first = 1.0f;
+  std::memcpy(&first, encode_depth_image(depth, DepthEncoding::kMetres32).data.data(), 4);
+  EXPECT_TRUE(std::isnan(first));
+  std::uint16_t first_mm = 1;
+  std::memcpy(&first_mm, encode_depth_image(depth, DepthEncoding::kMillimetres16).data.data(), 2);
+  EXPECT_EQ(first_mm, 0);
 }
 
 TEST(RosImage, PaddedRowsAreRead) {
