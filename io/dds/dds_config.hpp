@@ -12,12 +12,16 @@ class YamlSection;
 
 /// The QoS of one topic, in ROS terms (plain values; io/dds/dds_endpoint.hpp applies them).
 struct DdsQos {
-  bool reliable = true;          // RELIABLE (ROS default) or BEST_EFFORT (ROS sensor data)
-  bool transient_local = false;  // TRANSIENT_LOCAL: late joiners get the last `depth` samples
-  int depth = 10;                // samples, KEEP_LAST history
-  bool keep_all = false;         // KEEP_ALL history instead (depth unused): nothing is overwritten
-  int max_samples = 0;           // a KEEP_ALL reader's resource limit, samples (0: unlimited)
-  int max_blocking_ms = 1000;    // a reliable writer's wait for room before a write times out
+  DdsQos(bool is_reliable = true, bool is_transient_local = false, int history = 10)
+      : reliable(is_reliable), transient_local(is_transient_local), depth(history) {}
+
+  bool reliable;               // RELIABLE (ROS default) or BEST_EFFORT (ROS sensor data)
+  bool transient_local;        // TRANSIENT_LOCAL: late joiners get the last `depth` samples
+  int depth;                   // samples, KEEP_LAST history
+  bool keep_all = false;       // KEEP_ALL history instead (depth unused): nothing is overwritten
+  int max_samples = 0;         // a KEEP_ALL reader's resource limit, samples (0: unlimited)
+  int max_blocking_ms = 1000;  // a reliable writer's wait for room before a write times out
+  std::string user_data;       // USER_DATA: what the endpoint is, for matched peers to tell
 };
 
 struct DdsConfig {

@@ -1,6 +1,9 @@
 #include "jpcr/io/dds/dds_endpoint.hpp"
 
+#include <algorithm>
+#include <cstring>
 #include <thread>
+#include <vector>
 
 namespace jpcr {
 
@@ -23,6 +26,7 @@ class Qos {
     }
     const dds_data_representation_id_t xcdr1[] = {DDS_DATA_REPRESENTATION_XCDR1};
     dds_qset_data_representation(qos_, 1, xcdr1);
+    if (!q.user_data.empty()) dds_qset_userdata(qos_, q.user_data.data(), q.user_data.size());
   }
   ~Qos() { dds_delete_qos(qos_); }
   Qos(const Qos&) = delete;
@@ -89,6 +93,29 @@ int DdsEndpoint::matched() const {
   check_dds(dds_get_subscription_matched_status(endpoint_.get(), &status),
             "dds_get_subscription_matched_status(" + name_ + ")");
   return static_cast<int>(status.current_count);
+}
+
+int DdsEndpoint::matched_readers_with(const std::string& user_data) const {
+  if (kind_ != Kind::kWriter) throw DdsError(name_ + ": matched_readers_with needs a writer");
+  std::vector<dds_instance_handle_t> readers(static_cast<std::size_t>(matched()) + 4);
+  const dds_return_t n =
+      check_dds(dds_get_matched_subscriptions(endpoint_.get(), readers.data(), readers.size()),
+                "dds_get_matched_subscriptions(" + name_ + ")");
+  int count = 0;
+  for (dds_return_t i = 0; i < std::min<dds_return_t>(n, readers.size()); ++i) {
+    // NULL when the reader went away meanwhile.
+    dds_builtintopic_endpoint_t* reader =
+        dds_get_matched_subscription_data(endpoint_.get(), readers[static_cast<std::size_t>(i)]);
+    if (reader == nullptr) continue;
+    void* value = nullptr;
+    std::size_t size = 0;
+    if (dds_qget_userdata(reader->qos, &value, &size) && size == user_data.size() &&
+        std::memcmp(value, user_data.data(), size) == 0)
+      ++count;
+    dds_free(value);
+    dds_builtintopic_free_endpoint(reader);
+  }
+  return count;
 }
 
 bool DdsEndpoint::wait_matched(int count, std::chrono::milliseconds timeout) const {

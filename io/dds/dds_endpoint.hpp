@@ -51,6 +51,8 @@ class DdsEndpoint {
   dds_entity_t handle() const { return endpoint_.get(); }
   /// Matched remote endpoints (readers of a writer, writers of a reader).
   int matched() const;
+  /// A writer: its matched readers whose USER_DATA (DdsQos::user_data) is `user_data`.
+  int matched_readers_with(const std::string& user_data) const;
   /// Waits until at least `count` endpoints are matched; false on timeout.
   bool wait_matched(int count, std::chrono::milliseconds timeout) const;
   /// A writer: waits until matched reliable readers acknowledged every sample; false on timeout.

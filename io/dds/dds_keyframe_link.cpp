@@ -23,13 +23,20 @@ DdsQos keyframe_topic_qos() {
 DdsQos keyframe_reader_qos(const DdsConfig& config) {
   DdsQos qos = keyframe_topic_qos();
   qos.max_samples = config.keyframe_queue;
+  qos.user_data = kBackEndUserData;
   return qos;
+}
+
+int DdsKeyframeWriter::matched() const {
+  return writer_.matched_readers_with(kBackEndUserData);
 }
 
 DdsKeyframeWriter::DdsKeyframeWriter(const DdsParticipant& participant, const DdsConfig& config)
     : config_(config), writer_(participant, keyframe_topic_name(config), keyframe_topic_qos()) {}
 
 namespace {
+
+constexpr int kMatchPoll = 5;  // ms between two looks at the matched back ends
 
 // Calls try_once, which blocks for at most one try of kKeyframeWriteTry ms, until it succeeds;
 // between tries asks keep_waiting (empty: waits as long as it takes) with the seconds waited.
@@ -57,14 +64,22 @@ bool DdsKeyframeWriter::flush(const KeepWaiting& keep_waiting) const {
       keep_waiting);
 }
 
-bool DdsKeyframeWriter::wait_until_unmatched(const KeepWaiting& keep_waiting) const {
+bool DdsKeyframeWriter::wait_for_back_ends(bool present, const KeepWaiting& keep_waiting) const {
   return retry_until(
       [&] {
-        if (writer_.matched() == 0) return true;
-        std::this_thread::sleep_for(std::chrono::milliseconds(kKeyframeWriteTry));
+        if ((matched() > 0) == present) return true;
+        std::this_thread::sleep_for(std::chrono::milliseconds(kMatchPoll));
         return false;
       },
       keep_waiting);
+}
+
+bool DdsKeyframeWriter::wait_matched(std::chrono::milliseconds timeout) const {
+  return wait_for_back_ends(true, [&](double waited) { return waited * 1000.0 < timeout.count(); });
+}
+
+bool DdsKeyframeWriter::wait_until_unmatched(const KeepWaiting& keep_waiting) const {
+  return wait_for_back_ends(false, keep_waiting);
 }
 
 bool DdsKeyframeWriter::publish(const Frame& frame, const StampedPose& pose,

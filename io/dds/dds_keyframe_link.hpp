@@ -15,7 +15,8 @@
 // only while the writer exists: a front end that exited right after its last write would lose the
 // keyframes still held (measured with a queue of 1). So the front end, once the back ends
 // acknowledged the end of stream, waits until they are gone (wait_until_unmatched): a jpcr back
-// end exits after the end of stream.
+// end exits after the end of stream. Back ends are told from other readers of the topic by their
+// reader's USER_DATA, so a jpcr_dds_echo on it holds nothing up.
 //
 // Run the two in separate processes, as jpcr_node does. In one process Cyclone delivers locally
 // and a write that times out on a full reader is not delivered at all: publish() then writes it
@@ -44,8 +45,11 @@ constexpr int kKeyframeWriteTry = 100;
 
 /// The writer's QoS: reliable, volatile, keep all, writes retried every kKeyframeWriteTry ms.
 DdsQos keyframe_topic_qos();
-/// The reader's: the same, holding at most config.keyframe_queue unread keyframes.
+/// The reader's: the same, holding at most config.keyframe_queue unread keyframes, with
+/// USER_DATA kBackEndUserData.
 DdsQos keyframe_reader_qos(const DdsConfig& config);
+/// What a jpcr back end's keyframe reader says it is (USER_DATA).
+inline constexpr const char* kBackEndUserData = "jpcr back end";
 
 /// Asked every kKeyframeWriteTry ms while a publish waits for room in the back end's queue, with
 /// the seconds waited so far; false gives the sample up.
@@ -65,20 +69,21 @@ class DdsKeyframeWriter {
   bool publish_end(int frames, const Trajectory& tracked,
                    const KeepWaiting& keep_waiting = {}) const;
 
-  /// Back ends matched.
-  int matched() const { return writer_.matched(); }
-  bool wait_matched(std::chrono::milliseconds timeout) const {
-    return writer_.wait_matched(1, timeout);
-  }
+  /// jpcr back ends matched: readers whose USER_DATA is kBackEndUserData, so that another
+  /// reader of the topic (jpcr_dds_echo, a recorder) neither starts nor holds up the stream.
+  int matched() const;
+  /// Waits until a back end is matched; false on timeout.
+  bool wait_matched(std::chrono::milliseconds timeout) const;
   /// Waits until the back ends acknowledged every keyframe (before exiting): a back end
   /// acknowledges a keyframe once its queue has room for it, so this waits as publish does.
   bool flush(const KeepWaiting& keep_waiting) const;
-  /// Waits until no reader is matched any more (the back ends finished), asking keep_waiting
-  /// every kKeyframeWriteTry ms; false when it gave up.
+  /// Waits until no back end is matched any more (they finished), asking keep_waiting between
+  /// looks; false when it gave up.
   bool wait_until_unmatched(const KeepWaiting& keep_waiting) const;
 
  private:
   bool write(const RosKeyframe& message, const KeepWaiting& keep_waiting) const;
+  bool wait_for_back_ends(bool present, const KeepWaiting& keep_waiting) const;
 
   DdsConfig config_;
   DdsWriter<RosKeyframe> writer_;

@@ -121,6 +121,27 @@ else
   echo "FAIL: late back end: exit $rc"; cat "$tmp/front4.txt" "$tmp/back4.txt"; fail=1
 fi
 
+# Another reader of the keyframe topic (an echo, a recorder) is no back end: it neither counts as
+# one for --backend-wait nor keeps the front end waiting at the end (it used to, until the echo
+# exited).
+"$echo_bin" rt/jpcr/keyframe "${dds[@]}" --timeout 240 > "$tmp/kf5.txt" 2>&1 &
+kf_echo=$!; pids+=($kf_echo)
+"$node" --role frontend "${dds[@]}" "${method[@]}" --backend-wait 1 --max-frames 4 \
+  --idle-timeout 60 > "$tmp/front5.txt" 2> "$tmp/front5.err" &
+front_pid=$!; pids+=($front_pid)
+sleep 1
+expect 0 "published 4 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 --frames 0:4 \
+  --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
+wait_bounded $front_pid 30; rc=$?
+if [ $rc = 0 ] && grep -q "no back end on rt/jpcr/keyframe" "$tmp/front5.err" &&
+    ! grep -q "waiting for the back end to finish" "$tmp/front5.err"; then
+  echo "ok: an echo on the keyframe topic is no back end: $(cat "$tmp/front5.txt")"
+else
+  echo "FAIL: front end with an echo on its keyframes: exit $rc"
+  cat "$tmp/front5.txt" "$tmp/front5.err"; fail=1
+fi
+kill -INT $kf_echo; wait_bounded $kf_echo 10
+
 expect 2 "--role must be all, frontend or backend, got 'middle'" -- "$node" --role middle
 expect 2 "--backend-wait must be >= 0" -- "$node" --role frontend --backend-wait -1
 exit ${fail:-0}
