@@ -97,6 +97,20 @@ sleep 1.5; kill -TERM $back_pid; wait_bounded $back_pid 20; rc=$?
 grep -q "stopped by signal" "$tmp/back3.txt" && [ $rc = 0 ] ||
   { echo "FAIL: back end SIGTERM: exit $rc"; cat "$tmp/back3.txt"; fail=1; }
 
+# Ctrl-C under a launcher arrives twice (from the terminal and from the launcher): two SIGINTs
+# 0.3 s apart still stop the front end cleanly, here while its shutdown waits --flush-timeout for
+# a stopped back end (the second SIGINT used to kill it).
+"$node" --role backend "${dds[@]}" > "$tmp/back6.txt" 2>&1 &
+back_pid=$!; pids+=($back_pid)
+"$node" --role frontend "${dds[@]}" --flush-timeout 3000 > "$tmp/front6.txt" 2>&1 &
+front_pid=$!; pids+=($front_pid)
+sleep 1.5; kill -STOP $back_pid
+kill -INT $front_pid; sleep 0.3; kill -INT $front_pid
+wait_bounded $front_pid 30; rc=$?
+kill -CONT $back_pid; kill -TERM $back_pid; wait_bounded $back_pid 20
+grep -q "processed 0 frames.*stopped by signal" "$tmp/front6.txt" && [ $rc = 0 ] ||
+  { echo "FAIL: front end after two quick SIGINTs: exit $rc"; cat "$tmp/front6.txt"; fail=1; }
+
 # A back end started after the front end sent its first keyframes cannot chain the later ones:
 # it names the lost keyframes, publishes what it has and exits 1 (it used to skip every later
 # message, the end of stream included, and never stop).

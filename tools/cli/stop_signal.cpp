@@ -1,16 +1,31 @@
 #include "cli/stop_signal.hpp"
 
 #include <csignal>
+#include <ctime>
 
 namespace jpcr::cli {
 
 namespace {
 
 volatile std::sig_atomic_t g_stop = 0;
+volatile std::sig_atomic_t g_first_second = 0;  // CLOCK_MONOTONIC seconds of the first signal
 
-// Only async-signal-safe calls here: the first signal sets the flag; a second one restores the
-// default action and raises the signal again, which ends the process.
+// A signal this soon after the first is the same request delivered twice: Ctrl-C under a
+// launcher reaches the process from the terminal and from the launcher.
+constexpr long kDuplicateSeconds = 2;
+
+long monotonic_seconds() {
+  timespec now{};
+  clock_gettime(CLOCK_MONOTONIC, &now);  // async-signal-safe (POSIX)
+  return static_cast<long>(now.tv_sec);
+}
+
+// Only async-signal-safe calls here: the first signal sets the flag; a later one (not a
+// duplicate of the first) restores the default action and raises the signal again, which ends
+// the process.
 extern "C" void on_stop_signal(int signal_number) {
+  const long now = monotonic_seconds();
+  if (g_stop && now - g_first_second < kDuplicateSeconds) return;
   if (g_stop) {
     struct sigaction fallback {};
     fallback.sa_handler = SIG_DFL;
@@ -19,6 +34,7 @@ extern "C" void on_stop_signal(int signal_number) {
     raise(signal_number);
     return;
   }
+  g_first_second = static_cast<std::sig_atomic_t>(now);
   g_stop = 1;
 }
 

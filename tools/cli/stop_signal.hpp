@@ -1,6 +1,7 @@
 // Clean shutdown on SIGINT and SIGTERM: the handler only sets a flag that loops poll. A second
 // signal while the first is being handled ends the program at once (the default action), so an
-// impatient Ctrl-C still works.
+// impatient Ctrl-C still works; one within 1-2 s of the first counts as the same request (Ctrl-C
+// under ros2 launch reaches the process twice, from the terminal and from the launcher).
 //
 // Streaming programs (jpcr_node, jpcr_dds_echo, jpcr_dds_play) stop at the flag and finish
 // normally. Batch programs that write an output whole or not at all (jpcr_run, jpcr_curvature,
