@@ -29,8 +29,13 @@ const char* to_string(IcpVerdict verdict);
 
 struct IcpResult {
   Eigen::Isometry3d pose = Eigen::Isometry3d::Identity();  // T: source frame → target frame
-  int iterations = 0;         // Gauss-Newton iterations over all levels
-  bool converged = false;     // the last level stopped on a small step, not on its iteration cap
+  int iterations = 0;  // Gauss-Newton iterations over all levels
+  /// The finest level stopped on a step below min_step, or its last step moved the pose by less
+  /// than one standard deviation of the estimate (ξᵀ covariance⁻¹ ξ ≤ 1): more iterations would
+  /// not change it beyond its noise. Advisory: the verdict does not use it.
+  bool converged = false;
+  /// The statistics below describe the final pairs, those of the last linearisation, made one
+  /// Gauss-Newton step before the returned pose (a step within the noise when converged).
   double rms = 0.0;           // m, RMS point-to-plane residual of the final pairs
   double inlier_ratio = 0.0;  // final pairs / valid source points considered
   std::size_t inliers = 0;    // final pairs

@@ -98,6 +98,54 @@ TEST(PointToPlaneIcp, DefaultScheduleRecoversTheMotionToo) {
   EXPECT_LT(test::rotation_error(r.pose, pair.truth), 0.02 * kDeg);
 }
 
+// `converged` means the last step is within the estimate's noise (one standard deviation): four
+// steps at the finest level get there on a noisy pair; one step from 2 cm / 2° off does not.
+TEST(PointToPlaneIcp, ConvergedMeansTheLastStepIsWithinTheNoise) {
+  const Eigen::Isometry3d T_wt = test::room_view();
+  const Eigen::Isometry3d delta = test::motion(0.01, 0.5 * kDeg);
+  const CameraIntrinsics camera = synthetic_camera(320, 240);
+  const NoiseModel noise = parse_noise("range:0.3");
+  const FramePyramid source =
+      preprocess(render(test::room(), camera, T_wt * delta, noise, 3, 1).frame);
+  const FramePyramid target = preprocess(render(test::room(), camera, T_wt, noise, 3, 2).frame);
+  IcpParams four;  // the default's 2 steps at the finest level end 1-2 sigma short on this pair
+  four.iterations = {4, 2, 5};
+  const IcpResult full = align_point_to_plane(source, target, Eigen::Isometry3d::Identity(), four);
+  EXPECT_EQ(full.verdict, IcpVerdict::ok) << to_string(full.verdict);
+  EXPECT_TRUE(full.converged);
+  IcpParams one_step;
+  one_step.iterations = {1, 0, 0};
+  const Eigen::Isometry3d far = test::motion(0.02, 2.0 * kDeg) * delta;
+  const IcpResult cut = align_point_to_plane(source, target, far, one_step);
+  EXPECT_FALSE(cut.converged);
+  EXPECT_LT(test::translation_error(cut.pose, delta), test::translation_error(far, delta));
+}
+
+// Gauss-Newton near the solution of a large motion (15 cm, 12°) converges fast only with the
+// Jacobian of the left update T ← exp(ξ^) T: three steps from 2.7 mm / 0.15° off end 1.2e-6 m
+// from the fixed point; applied on the right (T ← T exp(ξ^)), 2.3e-5 m (measured). A 2 cm motion
+// cannot tell them apart: both sides then differ by about 3 %.
+TEST(PointToPlaneIcp, GaussNewtonConvergesFastNearALargeMotion) {
+  const Pair pair = render_pair(test::room(), test::room_view(), test::motion(0.15, 12.0 * kDeg));
+  IcpParams p;
+  p.level0_stride = 1;
+  p.min_step_translation = 0.0f;  // exactly the asked-for steps
+  p.min_step_rotation = 0.0f;
+  const Eigen::Isometry3d start = test::motion(0.0027, 0.15 * kDeg) * pair.truth;
+  p.iterations = {30, 0, 0};
+  const Eigen::Isometry3d fixed = align_point_to_plane(pair.source, pair.target, start, p).pose;
+  p.iterations = {3, 0, 0};
+  const IcpResult three = align_point_to_plane(pair.source, pair.target, start, p);
+  const double dt = test::translation_error(three.pose, fixed);
+  std::printf(
+      "3 steps from 2.7 mm, 0.15 deg off a 15 cm, 12 deg motion: %.2e m, %.2e deg from "
+      "the fixed point, which is %.2e m from the truth\n",
+      dt, test::rotation_error(three.pose, fixed) / kDeg,
+      test::translation_error(fixed, pair.truth));
+  EXPECT_LT(dt, 5e-6);
+  EXPECT_LT(test::translation_error(fixed, pair.truth), 1e-4);
+}
+
 TEST(PointToPlaneIcp, HolesInTheDepthDoNotPoisonTheSums) {
   // Real sensors drop pixels: every 7th pixel of both frames has no depth. A full-resolution
   // vertex may then be missing where the borrowed coarser normal exists.
