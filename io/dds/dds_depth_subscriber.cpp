@@ -5,6 +5,7 @@
 #include <deque>
 #include <iostream>
 #include <mutex>
+#include <utility>
 
 #include "jpcr/io/dds/ros_messages.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -132,9 +133,34 @@ std::size_t DdsDepthSubscriber::frames_dropped() const {
   return state_->dropped + lost_;
 }
 
+bool DdsDepthSubscriber::LogBudget::allow(std::size_t& left_out) {
+  const auto now = std::chrono::steady_clock::now();
+  const bool quiet_enough =
+      written_ < kFreeLines || std::chrono::duration<double>(now - last_).count() >= kQuietSeconds;
+  if (!quiet_enough) {
+    ++held_back_;
+    return false;
+  }
+  left_out = std::exchange(held_back_, 0);
+  ++written_;
+  last_ = now;
+  return true;
+}
+
+namespace {
+
+std::string left_out_note(std::size_t left_out) {
+  return left_out == 0 ? "" : " (" + std::to_string(left_out) + " such lines left out before)";
+}
+
+}  // namespace
+
 void DdsDepthSubscriber::reject(const std::string& topic, const std::string& problem) {
   ++rejected_;
-  *log_ << "jpcr dds: " << topic << ": rejected sample: " << problem << std::endl;
+  std::size_t left_out = 0;
+  if (reject_lines_.allow(left_out))
+    *log_ << "jpcr dds: " << topic << ": rejected sample: " << problem << left_out_note(left_out)
+          << std::endl;
 }
 
 // Decodes what the listeners queued (camera_info first, as a camera driver publishes it first),
@@ -199,13 +225,15 @@ void DdsDepthSubscriber::process() {
           << " frame(s) lost in transport, " << lost.total_count << " in all" << std::endl;
     lost_ = lost.total_count;
   }
-  if (dropped > dropped_logged_) {
+  std::size_t left_out = 0;
+  if (dropped > dropped_seen_ && drop_lines_.allow(left_out)) {
     *log_ << "jpcr dds: " << config_.depth_topic << ": dropped " << dropped - dropped_logged_
           << " frame(s), " << dropped << " in all: frames arrive faster than they are processed"
           << (s.camera ? "" : " or no camera_info received yet on " + config_.camera_info_topic)
-          << " (keep last " << s.queue_depth << ")" << std::endl;
+          << " (keep last " << s.queue_depth << ")" << left_out_note(left_out) << std::endl;
     dropped_logged_ = dropped;
   }
+  dropped_seen_ = dropped;
 }
 
 std::optional<Frame> DdsDepthSubscriber::wait_frame(std::chrono::milliseconds timeout) {
@@ -214,7 +242,7 @@ std::optional<Frame> DdsDepthSubscriber::wait_frame(std::chrono::milliseconds ti
   // What process() would act on: a camera_info, a new drop, a bad image, or a good one that has
   // its camera.
   auto work = [&] {
-    if (!s.cameras.empty() || s.dropped != dropped_logged_) return true;
+    if (!s.cameras.empty() || s.dropped != dropped_seen_) return true;
     if (s.camera) return !s.images.empty();
     return std::any_of(s.images.begin(), s.images.end(),
                        [](const ReceivedImage& r) { return !r.problem.empty(); });

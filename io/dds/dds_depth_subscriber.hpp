@@ -1,7 +1,8 @@
 // Receives depth frames from a ROS 2 depth camera: sensor_msgs/Image (16UC1 in mm or 32FC1 in m)
 // on DdsConfig::depth_topic with the latest sensor_msgs/CameraInfo of camera_info_topic. Every
 // sample is checked (io/dds/ros_image.hpp); a bad one is dropped with one line on the log naming
-// the topic and the problem, and reception goes on.
+// the topic and the problem (a flood of them: the first 10 lines, then one per 10 s that says how
+// many were left out), and reception goes on.
 //
 // Samples are taken from Cyclone as they arrive (a listener on Cyclone's receive thread) into a
 // queue of at most image_history_depth images, the KEEP_LAST depth of the input QoS: when the
@@ -55,12 +56,29 @@ class DdsDepthSubscriber {
   void process();
   void reject(const std::string& topic, const std::string& problem);
 
+  // A stream of bad samples or drops (a misconfigured camera at 30 Hz) must not flood the log:
+  // the first kFreeLines lines of a kind are written, then one per kQuietSeconds, which counts
+  // the lines left out.
+  class LogBudget {
+   public:
+    /// Whether a line may be written now; `left_out` the lines held back since the last one.
+    bool allow(std::size_t& left_out);
+
+   private:
+    static constexpr std::size_t kFreeLines = 10;
+    static constexpr double kQuietSeconds = 10.0;
+    std::size_t written_ = 0, held_back_ = 0;
+    std::chrono::steady_clock::time_point last_{};
+  };
+
   DdsConfig config_;
   std::ostream* log_;
   std::unique_ptr<State> state_;
   std::size_t frames_ = 0;
   std::size_t rejected_ = 0;
-  std::size_t dropped_logged_ = 0;
+  std::size_t dropped_seen_ = 0;    // the drops process() has looked at
+  std::size_t dropped_logged_ = 0;  // ... and those a log line counted
+  LogBudget reject_lines_, drop_lines_;
   bool distortion_logged_ = false;  // the note that D is not applied, once
   std::uint32_t lost_ = 0;
 };

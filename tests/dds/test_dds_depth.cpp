@@ -4,6 +4,7 @@
 // counted and logged.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <sstream>
 #include <thread>
 #include <vector>
@@ -214,6 +215,33 @@ TEST_F(DdsDepth, DepthBeforeCameraInfoWaitsForIt) {
   const std::optional<Frame> got = subscriber.wait_frame(kTimeout);
   ASSERT_TRUE(got);
   expect_same_frame(*got, sent, 1.0);
+}
+
+// A publisher of nothing but bad samples (a misconfigured camera) must not flood the log: every
+// sample is counted, the first 10 get a line each, the rest are left out until 10 s passed.
+TEST_F(DdsDepth, AFloodOfBadSamplesIsCountedButLoggedInPart) {
+  config_.image_history_depth = 64;  // every sample of the burst is kept for the subscriber
+  std::ostringstream log;
+  DdsDepthSubscriber subscriber(node_side_, config_, &log);
+  DdsWriter<RosImage> images(camera_side_, config_.depth_topic, config_.depth_qos());
+  ASSERT_TRUE(images.wait_matched(1, kTimeout));
+  RosImageBuffer rgb;
+  rgb.width = 4;
+  rgb.height = 2;
+  rgb.encoding = "rgb8";
+  rgb.step = 12;
+  rgb.data.assign(24, 0);
+  constexpr int kSent = 30;
+  for (int i = 0; i < kSent; ++i)
+    images.write(image_message(rgb, 1.0 + i, "cam"));
+  ASSERT_TRUE(images.wait_for_acks(kTimeout));
+  const auto deadline = std::chrono::steady_clock::now() + kTimeout;
+  while (subscriber.samples_rejected() < std::size_t{kSent} &&
+         std::chrono::steady_clock::now() < deadline)
+    subscriber.wait_frame(milliseconds(100));
+  EXPECT_EQ(subscriber.samples_rejected(), std::size_t{kSent});
+  const std::string text = log.str();
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 10) << text;
 }
 
 // A caller slower than the camera: of 7 frames sent before it asks, the queue (keep last 2)
