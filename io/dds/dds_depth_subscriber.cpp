@@ -1,6 +1,7 @@
 #include "jpcr/io/dds/dds_depth_subscriber.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <condition_variable>
 #include <deque>
 #include <iostream>
@@ -29,8 +30,11 @@ struct ReceivedCamera {
 
 // Owns a listener object; the reader copies it at creation.
 struct Listener {
-  Listener(void* arg, dds_on_data_available_fn on_data) : handle(dds_create_listener(arg)) {
+  Listener(void* arg, dds_on_data_available_fn on_data,
+           dds_on_requested_incompatible_qos_fn on_incompatible)
+      : handle(dds_create_listener(arg)) {
     dds_lset_data_available(handle, on_data);
+    dds_lset_requested_incompatible_qos(handle, on_incompatible);
   }
   ~Listener() { dds_delete_listener(handle); }
   dds_listener_t* handle;
@@ -42,8 +46,8 @@ struct DdsDepthSubscriber::State {
   State(const DdsParticipant& p, const DdsConfig& c)
       : queue_depth(static_cast<std::size_t>(c.image_history_depth)),
         limits(limits_of(c)),
-        camera_listener(this, on_camera_info),
-        depth_listener(this, on_depth),
+        camera_listener(this, on_camera_info, on_camera_incompatible),
+        depth_listener(this, on_depth, on_depth_incompatible),
         camera_info(p, c.camera_info_topic, c.camera_info_qos(), camera_listener.handle),
         depth(p, c.depth_topic, c.depth_qos(), depth_listener.handle) {}
 
@@ -99,8 +103,29 @@ struct DdsDepthSubscriber::State {
     });
   }
 
+  // A publisher this reader cannot match (a best-effort camera against the reliable default):
+  // Cyclone says so only here, so the policy is kept for process() to log.
+  static void on_incompatible(State& s, std::atomic<int>& policy,
+                              const dds_requested_incompatible_qos_status_t& status) {
+    policy = static_cast<int>(status.last_policy_id);
+    const std::lock_guard<std::mutex> lock(s.mutex);
+    s.arrived.notify_all();
+  }
+  static void on_depth_incompatible(dds_entity_t, const dds_requested_incompatible_qos_status_t st,
+                                    void* arg) {
+    State& s = *static_cast<State*>(arg);
+    on_incompatible(s, s.depth_incompatible, st);
+  }
+  static void on_camera_incompatible(dds_entity_t, const dds_requested_incompatible_qos_status_t st,
+                                     void* arg) {
+    State& s = *static_cast<State*>(arg);
+    on_incompatible(s, s.camera_incompatible, st);
+  }
+
   const std::size_t queue_depth;
   const RosImageLimits limits;
+  std::atomic<int> depth_incompatible{kNoPolicy}, camera_incompatible{kNoPolicy};
+  static constexpr int kNoPolicy = -1;
   std::mutex mutex;  // guards images, cameras, dropped
   std::condition_variable arrived;
   std::deque<ReceivedImage> images;
@@ -155,6 +180,32 @@ std::string left_out_note(std::size_t left_out) {
 
 }  // namespace
 
+namespace {
+
+// What a reader that cannot match a publisher should tell the user (Cyclone's last policy id).
+std::string incompatible_qos_note(int policy) {
+  switch (policy) {
+    case DDS_RELIABILITY_QOS_POLICY_ID:
+      return "its reliability: a best-effort publisher (a ROS sensor-data camera) needs "
+             "dds: {input_reliability: best_effort}";
+    case DDS_DURABILITY_QOS_POLICY_ID:
+      return "its durability";
+    case DDS_DATA_REPRESENTATION_QOS_POLICY_ID:
+      return "its data representation: jpcr reads XCDR1, as ROS 2 writes it";
+    default:
+      return "QoS policy " + std::to_string(policy);
+  }
+}
+
+}  // namespace
+
+void DdsDepthSubscriber::log_incompatible(const std::string& topic, std::atomic<int>& policy) {
+  const int p = policy.exchange(State::kNoPolicy);
+  if (p == State::kNoPolicy) return;
+  *log_ << "jpcr dds: " << topic << ": a publisher offers a QoS this reader cannot match, "
+        << incompatible_qos_note(p) << "; its samples do not arrive" << std::endl;
+}
+
 void DdsDepthSubscriber::reject(const std::string& topic, const std::string& problem) {
   ++rejected_;
   std::size_t left_out = 0;
@@ -167,6 +218,8 @@ void DdsDepthSubscriber::reject(const std::string& topic, const std::string& pro
 // outside the lock so that Cyclone's receive thread never waits for a decode.
 void DdsDepthSubscriber::process() {
   State& s = *state_;
+  log_incompatible(config_.depth_topic, s.depth_incompatible);
+  log_incompatible(config_.camera_info_topic, s.camera_incompatible);
   std::deque<ReceivedCamera> cameras;
   {
     const std::lock_guard<std::mutex> lock(s.mutex);
@@ -243,6 +296,8 @@ std::optional<Frame> DdsDepthSubscriber::wait_frame(std::chrono::milliseconds ti
   // its camera.
   auto work = [&] {
     if (!s.cameras.empty() || s.dropped != dropped_seen_) return true;
+    if (s.depth_incompatible != State::kNoPolicy || s.camera_incompatible != State::kNoPolicy)
+      return true;
     if (s.camera) return !s.images.empty();
     return std::any_of(s.images.begin(), s.images.end(),
                        [](const ReceivedImage& r) { return !r.problem.empty(); });

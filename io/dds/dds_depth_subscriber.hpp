@@ -15,6 +15,7 @@
 // not applied.
 #pragma once
 
+#include <atomic>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -55,6 +56,7 @@ class DdsDepthSubscriber {
   struct State;
   void process();
   void reject(const std::string& topic, const std::string& problem);
+  void log_incompatible(const std::string& topic, std::atomic<int>& policy);
 
   // A stream of bad samples or drops (a misconfigured camera at 30 Hz) must not flood the log:
   // the first kFreeLines lines of a kind are written, then one per kQuietSeconds, which counts

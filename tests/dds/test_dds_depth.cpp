@@ -217,6 +217,22 @@ TEST_F(DdsDepth, DepthBeforeCameraInfoWaitsForIt) {
   expect_same_frame(*got, sent, 1.0);
 }
 
+// A best-effort camera (ROS sensor-data QoS) cannot match the reliable default: Cyclone delivers
+// nothing, so the subscriber must say why and what to set.
+TEST_F(DdsDepth, ABestEffortCameraIsNamedWithTheSettingThatMatchesIt) {
+  std::ostringstream log;
+  DdsDepthSubscriber subscriber(node_side_, config_, &log);
+  const DdsWriter<RosImage> images(camera_side_, config_.depth_topic, DdsQos{false, false, 2});
+  const auto deadline = std::chrono::steady_clock::now() + kTimeout;
+  while (log.str().empty() && std::chrono::steady_clock::now() < deadline)
+    subscriber.wait_frame(milliseconds(100));
+  EXPECT_EQ(log.str(), "jpcr dds: " + config_.depth_topic +
+                           ": a publisher offers a QoS this reader cannot match, its reliability: "
+                           "a best-effort publisher (a ROS sensor-data camera) needs dds: "
+                           "{input_reliability: best_effort}; its samples do not arrive\n");
+  EXPECT_EQ(subscriber.matched(), 0);
+}
+
 // A publisher of nothing but bad samples (a misconfigured camera) must not flood the log: every
 // sample is counted, the first 10 get a line each, the rest are left out until 10 s passed.
 TEST_F(DdsDepth, AFloodOfBadSamplesIsCountedButLoggedInPart) {
