@@ -7,11 +7,36 @@
 
 namespace jpcr {
 
+namespace {
+
+// A DDS topic name as ROS 2 maps one: "rt/" + the ROS name without its leading slash, made of
+// letters, digits, '_' and '/'. A ROS name such as /camera/depth would match nothing, silently.
+void check_topic(const std::string& field, const std::string& name) {
+  if (name.empty()) throw InputError(field + ": must not be empty");
+  if (name.front() == '/') {
+    throw InputError(field + ": '" + name + "' is a ROS name; its DDS topic is 'rt" + name + "'");
+  }
+  for (const char c : name) {
+    const bool allowed = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') ||
+                         (c >= '0' && c <= '9') || c == '_' || c == '/';
+    if (!allowed) {
+      throw InputError(field + ": '" + name +
+                       "' holds a character other than letters, digits, '_' and '/'");
+    }
+  }
+  if (name.find("//") != std::string::npos) throw InputError(field + ": '" + name + "' holds '//'");
+}
+
+}  // namespace
+
 void DdsConfig::validate() const {
   if (domain_id < 0 || domain_id > 232) throw InputError("domain_id: must be in 0..232");
-  if (topic_prefix.empty()) throw InputError("topic_prefix: must not be empty");
-  if (depth_topic.empty()) throw InputError("depth_topic: must not be empty");
-  if (camera_info_topic.empty()) throw InputError("camera_info_topic: must not be empty");
+  check_topic("topic_prefix", topic_prefix);
+  check_topic("depth_topic", depth_topic);
+  check_topic("camera_info_topic", camera_info_topic);
+  if (depth_topic.back() == '/' || camera_info_topic.back() == '/')
+    throw InputError(std::string(depth_topic.back() == '/' ? "depth_topic" : "camera_info_topic") +
+                     ": must not end with '/'");
   if (history_depth < 1) throw InputError("history_depth: must be at least 1");
   if (image_history_depth < 1) throw InputError("image_history_depth: must be at least 1");
   if (keyframe_queue < 1) throw InputError("keyframe_queue: must be at least 1");

@@ -354,6 +354,17 @@ TEST(DdsConfig, YamlSectionMapsOntoTheStruct) {
             true);
   EXPECT_NE(input_error_of([] { parse_params("dds:\n  input_reliability: maybe\n", "p.yaml"); }),
             "<no error>");
+  // A ROS name would match no DDS topic, silently.
+  EXPECT_EQ(input_error_of(
+                [] { parse_params("dds:\n  depth_topic: /camera/depth/image_rect\n", "p.yaml"); }),
+            "p.yaml:2: key 'dds.depth_topic': '/camera/depth/image_rect' is a ROS name; its DDS "
+            "topic is 'rt/camera/depth/image_rect'");
+  EXPECT_EQ(
+      input_error_of([] { parse_params("dds:\n  topic_prefix: 'rt/my robot/'\n", "p.yaml"); }),
+      "p.yaml:2: key 'dds.topic_prefix': 'rt/my robot/' holds a character other than letters, "
+      "digits, '_' and '/'");
+  EXPECT_EQ(input_error_of([] { parse_params("dds:\n  camera_info_topic: rt/c/\n", "p.yaml"); }),
+            "p.yaml:2: key 'dds.camera_info_topic': must not end with '/'");
 }
 
 TEST(DdsConfig, DefaultYamlStatesTheBuiltInDefaults) {
