@@ -95,6 +95,9 @@ int run(int argc, char** argv) {
     if (!args.parse(argc, argv)) return 0;
     EchoOptions o;
     o.topic = args.get("TOPIC");
+    if (o.topic.front() == '/')  // a ROS name matches no DDS topic
+      throw cli::UsageError("TOPIC '" + o.topic + "' is a ROS name; its DDS topic is 'rt" +
+                            o.topic + "'");
     const std::string type = args.has("type") ? args.get("type") : type_of_topic(o.topic);
     if (std::find(kTypes.begin(), kTypes.end(), type) == kTypes.end()) {
       throw cli::UsageError(
