@@ -36,7 +36,9 @@ struct DdsConfig {
   int image_history_depth = 2;        // samples, KEEP_LAST depth of image topics (MB each)
   int keyframe_queue = 32;            // keyframes a split back end holds unread (MB each)
   bool input_reliable = true;         // depth input QoS: reliable (ROS default) or best effort
-  double max_image_megabytes = 64.0;  // MiB, larger claimed images are rejected unread
+  // MiB, larger claimed images are rejected unread. Cyclone reassembles a sample before jpcr
+  // sees it: its MaxSampleSize (65 MiB in configs/cyclonedds_loopback.xml) bounds that memory.
+  double max_image_megabytes = 64.0;
   int max_image_side = 16384;         // pixels, larger claimed width or height is rejected
 
   /// Throws InputError "field: problem" on a value out of range.
