@@ -68,13 +68,18 @@ n=$(grep -c "^image .* 160x120 rgb8 .* ok$" "$tmp/color.txt")
 [ "$n" = 6 ] || { echo "FAIL: $n of 6 curvature colour maps"; cat "$tmp/color.txt"; fail=1; }
 same_path "$tmp/path.txt" "$tmp/off/trajectory.txt" || { echo "FAIL: node path vs offline"; cat "$tmp/path.txt"; fail=1; }
 
-# --idle-timeout after the first frame, and SIGTERM before any, both stop with exit 0.
-"$node" "${dds[@]}" --method icp-ftf --idle-timeout 2 > "$tmp/idle.txt" 2>&1 &
+# --idle-timeout after the first frame, and SIGTERM before any, both stop with exit 0. The same
+# two frames played again are out of time order: skipped, one line each.
+"$node" "${dds[@]}" --method icp-ftf --idle-timeout 6 > "$tmp/idle.txt" 2>&1 &
 idle_pid=$!; pids+=($idle_pid)
-expect 0 "published 2 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 --frames 0:2 \
-  --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
-expect_node $idle_pid 60 "$tmp/idle.txt" "processed 2 frames.*stopped by --idle-timeout" \
-  "idle timeout"
+for _ in 1 2; do
+  expect 0 "published 2 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 --frames 0:2 \
+    --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
+done
+expect_node $idle_pid 60 "$tmp/idle.txt" "processed 2 frames.*skipped 2 frames.*stopped by --idle-timeout" \
+  "idle timeout, repeated frames skipped"
+n=$(grep -c "skipped an input: frame stamped .* is not after the previous frame" "$tmp/idle.txt")
+[ "$n" = 2 ] || { echo "FAIL: $n out-of-order lines, want 2"; cat "$tmp/idle.txt"; fail=1; }
 # keep_history: false, an unattended run: J-full windows of 3 (every frame a keyframe) forget
 # each final frame, and every keyframe's map is still published.
 printf 'dds:\n  history_depth: 32\n  image_history_depth: 16\npipeline:\n  keep_history: false\n  window: 3\n' \

@@ -56,10 +56,12 @@ int run_all(const NodeOptions& o, const DdsParticipant& participant) {
         publisher.keyframe_final(*runner, keyframe, quadrics);
       },
       device_refiner_factory(o.device, std::cerr));
+  node::StampOrder order;  // live frames in time order
   node::Progress progress;
   const node::Outcome outcome = node::receive(
       o.stop, [&](auto slice) { return subscriber.wait_frame(slice); },
       [&](const Frame& frame) {
+        order.take(frame.timestamp);
         const PipelineFrame& f = runner->add(frame);
         publisher.frame_added(*runner, f);
         progress.frame(f, runner->keyframe_count(), subscriber);
@@ -100,10 +102,12 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
     waiting = true;
     return !cli::stop_requested();
   };
+  node::StampOrder order;  // live frames in time order
   node::Progress progress;
   const node::Outcome outcome = node::receive(
       o.stop, [&](auto slice) { return subscriber.wait_frame(slice); },
       [&](const Frame& frame) {
+        order.take(frame.timestamp);
         bool keyframe = false;
         const PipelineFrame f = front_end.track(frame, &keyframe);
         results.publish_odometry(

@@ -46,6 +46,29 @@ inline std::string rate_summary(const Outcome& o, const char* inputs) {
   return line;
 }
 
+/// Live frames must come in time order: a frame stamped at or before the last one taken (a
+/// second publisher, a looping recording) would be tracked as a motion back in time.
+class StampOrder {
+ public:
+  /// Throws InputError (the input is skipped) unless `stamp` is after the last one taken.
+  void take(double stamp) {
+    if (taken_ && !(stamp > last_)) {
+      char text[160];
+      std::snprintf(text, sizeof text,
+                    "frame stamped %.9f is not after the previous frame (%.9f): out of order or "
+                    "repeated",
+                    stamp, last_);
+      throw InputError(text);
+    }
+    last_ = stamp;
+    taken_ = true;
+  }
+
+ private:
+  bool taken_ = false;
+  double last_ = 0.0;
+};
+
 /// Calls on_input(input) for each `next(slice)` that is not empty, until a stop. An InputError
 /// from on_input skips that input with one log line.
 template <typename Next, typename OnInput>
