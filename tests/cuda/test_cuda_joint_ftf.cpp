@@ -81,6 +81,25 @@ std::uint64_t announce_seed() {
   return seed;
 }
 
+// A 160x120 random pair with what CudaJointSystem::load takes: default parameters, their
+// pattern, Quad IT's map of frame 1 and the start poses {I, T₂}.
+struct PairInputs {
+  test::RandomPair pair;
+  JointParams params;
+  NeighbourhoodPattern pattern;
+  QuadricMap initial;
+  std::vector<Eigen::Isometry3d> poses;
+};
+
+PairInputs pair_inputs(std::uint64_t seed) {
+  PairInputs in;
+  in.pair = test::random_pair(seed, 160, 120);
+  in.pattern = in.params.quadric.pattern.for_width(in.pair.camera.width);
+  in.initial = QuadricFit(in.params.quadric).estimate(in.pair.vertices[0]);
+  in.poses = {Eigen::Isometry3d::Identity(), in.pair.start};
+  return in;
+}
+
 // The parity tests' inputs, checked on the CPU (runs without a GPU too): a random pair overlaps
 // (measured 34-72 % of the pixels active on 8 seeds; the bound is 12.5 %) and its start pose is
 // 1 cm / 1° off the truth.
@@ -267,11 +286,8 @@ TEST(CudaJointFrameToFrame, RejectsBadInputLikeTheCpu) {
 // the reduction is deterministic, so the system linearises to the same numbers, bit for bit.
 TEST(CudaJointFrameToFrame, ARejectedLoadKeepsTheLoadedPair) {
   SKIP_WITHOUT_GPU();
-  const test::RandomPair pair = test::random_pair(announce_seed(), 160, 120);
-  const JointParams params;
-  const NeighbourhoodPattern pattern = params.quadric.pattern.for_width(pair.camera.width);
-  const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
-  const std::vector<Eigen::Isometry3d> poses = {Eigen::Isometry3d::Identity(), pair.start};
+  const PairInputs in = pair_inputs(announce_seed());
+  const auto& [pair, params, pattern, initial, poses] = in;
   CudaJointSystem gpu(params.terms(true));
   gpu.load(pair.vertices, pair.camera, pattern, poses, initial);
   const ReducedSystem before = gpu.linearize(params.initial_damping);
@@ -305,13 +321,10 @@ TEST(CudaJointFrameToFrame, ProposeBeforeLoadIsALogicError) {
 // out of that order the calls are logic errors, not reads of another pair's leftovers.
 TEST(CudaJointFrameToFrame, CallsOutOfTheLinearizeProposeAcceptOrderAreLogicErrors) {
   SKIP_WITHOUT_GPU();
-  const test::RandomPair pair = test::random_pair(announce_seed(), 160, 120);
-  const JointParams params;
-  const NeighbourhoodPattern pattern = params.quadric.pattern.for_width(pair.camera.width);
-  const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
+  const PairInputs in = pair_inputs(announce_seed());
+  const auto& [pair, params, pattern, initial, poses] = in;
   CudaJointSystem gpu(params.terms(true));
-  gpu.load(pair.vertices, pair.camera, pattern, {Eigen::Isometry3d::Identity(), pair.start},
-           initial);
+  gpu.load(pair.vertices, pair.camera, pattern, poses, initial);
   EXPECT_THROW(gpu.propose(ReducedSystem{}, 0.0, {Vector6d::Zero()}), std::logic_error);
   EXPECT_THROW(gpu.factors(), std::logic_error);
   EXPECT_THROW(gpu.candidate(), std::logic_error);
