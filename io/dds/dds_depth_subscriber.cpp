@@ -158,28 +158,6 @@ std::size_t DdsDepthSubscriber::frames_dropped() const {
   return state_->dropped + lost_;
 }
 
-bool DdsDepthSubscriber::LogBudget::allow(std::size_t& left_out) {
-  const auto now = std::chrono::steady_clock::now();
-  const bool quiet_enough =
-      written_ < kFreeLines || std::chrono::duration<double>(now - last_).count() >= kQuietSeconds;
-  if (!quiet_enough) {
-    ++held_back_;
-    return false;
-  }
-  left_out = std::exchange(held_back_, 0);
-  ++written_;
-  last_ = now;
-  return true;
-}
-
-namespace {
-
-std::string left_out_note(std::size_t left_out) {
-  return left_out == 0 ? "" : " (" + std::to_string(left_out) + " such lines left out before)";
-}
-
-}  // namespace
-
 namespace {
 
 // What a reader that cannot match a publisher should tell the user (Cyclone's last policy id).
@@ -210,7 +188,7 @@ void DdsDepthSubscriber::reject(const std::string& topic, const std::string& pro
   ++rejected_;
   std::size_t left_out = 0;
   if (reject_lines_.allow(left_out))
-    *log_ << "jpcr dds: " << topic << ": rejected sample: " << problem << left_out_note(left_out)
+    *log_ << "jpcr dds: " << topic << ": rejected sample: " << problem << LogBudget::note(left_out)
           << std::endl;
 }
 
@@ -283,7 +261,7 @@ void DdsDepthSubscriber::process() {
     *log_ << "jpcr dds: " << config_.depth_topic << ": dropped " << dropped - dropped_logged_
           << " frame(s), " << dropped << " in all: frames arrive faster than they are processed"
           << (s.camera ? "" : " or no camera_info received yet on " + config_.camera_info_topic)
-          << " (keep last " << s.queue_depth << ")" << left_out_note(left_out) << std::endl;
+          << " (keep last " << s.queue_depth << ")" << LogBudget::note(left_out) << std::endl;
     dropped_logged_ = dropped;
   }
   dropped_seen_ = dropped;

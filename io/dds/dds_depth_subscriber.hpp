@@ -26,6 +26,7 @@
 
 #include "jpcr/io/dds/dds_config.hpp"
 #include "jpcr/io/dds/dds_participant.hpp"
+#include "jpcr/io/log_budget.hpp"
 #include "jpcr/quadric/frame.hpp"
 
 namespace jpcr {
@@ -58,30 +59,15 @@ class DdsDepthSubscriber {
   void reject(const std::string& topic, const std::string& problem);
   void log_incompatible(const std::string& topic, std::atomic<int>& policy);
 
-  // A stream of bad samples or drops (a misconfigured camera at 30 Hz) must not flood the log:
-  // the first kFreeLines lines of a kind are written, then one per kQuietSeconds, which counts
-  // the lines left out.
-  class LogBudget {
-   public:
-    /// Whether a line may be written now; `left_out` the lines held back since the last one.
-    bool allow(std::size_t& left_out);
-
-   private:
-    static constexpr std::size_t kFreeLines = 10;
-    static constexpr double kQuietSeconds = 10.0;
-    std::size_t written_ = 0, held_back_ = 0;
-    std::chrono::steady_clock::time_point last_{};
-  };
-
   DdsConfig config_;
   std::ostream* log_;
   std::unique_ptr<State> state_;
   std::size_t frames_ = 0;
   std::size_t rejected_ = 0;
-  std::size_t dropped_seen_ = 0;    // the drops process() has looked at
-  std::size_t dropped_logged_ = 0;  // ... and those a log line counted
-  LogBudget reject_lines_, drop_lines_;
-  bool distortion_logged_ = false;  // the note that D is not applied, once
+  std::size_t dropped_seen_ = 0;         // the drops process() has looked at
+  std::size_t dropped_logged_ = 0;       // ... and those a log line counted
+  LogBudget reject_lines_, drop_lines_;  // the first 10 lines of a kind, then one per 10 s
+  bool distortion_logged_ = false;       // the note that D is not applied, once
   std::uint32_t lost_ = 0;
 };
 

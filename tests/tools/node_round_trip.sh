@@ -80,6 +80,20 @@ expect_node $idle_pid 60 "$tmp/idle.txt" "processed 2 frames.*skipped 2 frames.*
   "idle timeout, repeated frames skipped"
 n=$(grep -c "skipped an input: frame stamped .* is not after the previous frame" "$tmp/idle.txt")
 [ "$n" = 2 ] || { echo "FAIL: $n out-of-order lines, want 2"; cat "$tmp/idle.txt"; fail=1; }
+# A step back of more than a second is a new time line (a restarted recording): taken, said once.
+printf 'synthetic:\n  trajectory:\n    rate: 0.5\n' > "$tmp/slow.yaml"
+expect 0 "wrote 2 frames" -- "$synth" --scene room_spheres --frames 2 --size 160x120 --seed 4 \
+  --params "$tmp/slow.yaml" --out "$tmp/slow"
+"$node" "${dds[@]}" --method icp-ftf --idle-timeout 6 > "$tmp/reset.txt" 2>&1 &
+reset_pid=$!; pids+=($reset_pid)
+for frames in 1:2 0:1; do
+  expect 0 "published 1 frames" -- "$play" --dataset "$tmp/slow" --encoding 32FC1 \
+    --frames $frames --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
+done
+expect_node $reset_pid 60 "$tmp/reset.txt" "processed 2 frames.*skipped 0 frames" \
+  "a new time line is taken"
+grep -q "the stamps went back by 2 s .*taken as a new time line" "$tmp/reset.txt" ||
+  { echo "FAIL: no line about the new time line"; cat "$tmp/reset.txt"; fail=1; }
 # keep_history: false, an unattended run: J-full windows of 3 (every frame a keyframe) forget
 # each final frame, and every keyframe's map is still published.
 printf 'dds:\n  history_depth: 32\n  image_history_depth: 16\npipeline:\n  keep_history: false\n  window: 3\n' \

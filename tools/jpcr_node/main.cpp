@@ -268,7 +268,9 @@ int node_main(int argc, char** argv) {
       .option("window", "keyframes per J-full / Q-full / ICP-bundle window, 2-16 (default: params)")
       .option("max-frames", "stop after N processed frames (0: no limit; not the back end)", "0")
       .option("idle-timeout",
-              "stop when no input arrived for S seconds after the first one (0: never)", "0")
+              "stop when no input was processed for S seconds after the first one (skipped ones do "
+              "not count; 0: never)",
+              "0")
       .option("flush-timeout",
               "seconds to wait for the readers' acknowledgements at exit (after a signal, also for "
               "the back end)",

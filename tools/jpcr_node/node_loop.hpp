@@ -14,6 +14,8 @@
 #include "cli/stop_signal.hpp"
 #include "jpcr/backend/pipeline_back_end.hpp"
 #include "jpcr/io/dds/dds_depth_subscriber.hpp"
+#include "jpcr/io/dds/ros_image.hpp"
+#include "jpcr/io/log_budget.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr::node {
@@ -26,7 +28,7 @@ inline double seconds_since(Clock::time_point t) {
 
 struct StopRules {
   int max_items = 0;          // stop after this many processed inputs (0: no limit)
-  double idle_timeout = 0.0;  // s without input after the first one (0: never)
+  double idle_timeout = 0.0;  // s without a processed input after the first one (0: never)
 };
 
 enum class Step { kProcessed, kEndOfStream };
@@ -46,55 +48,67 @@ inline std::string rate_summary(const Outcome& o, const char* inputs) {
   return line;
 }
 
-/// Live frames must come in time order: a frame stamped at or before the last one taken (a
-/// second publisher, a looping recording) would be tracked as a motion back in time.
+/// Live frames must come in time order: a frame stamped at or up to kMaxStepBack before the last
+/// one taken (a second publisher, a repeated sample) would be tracked as a motion back in time.
+/// A larger step back is a new time line (a restarted recording, a reset clock): taken, with one
+/// line, so that the node does not skip every later frame.
 class StampOrder {
  public:
-  /// Throws InputError (the input is skipped) unless `stamp` is after the last one taken.
+  static constexpr double kMaxStepBack = 1.0;  // s
+
+  /// Throws InputError (the input is skipped) when `stamp` is out of order.
   void take(double stamp) {
     if (taken_ && !(stamp > last_)) {
-      char text[160];
-      std::snprintf(text, sizeof text,
-                    "frame stamped %.9f is not after the previous frame (%.9f): out of order or "
-                    "repeated",
-                    stamp, last_);
-      throw InputError(text);
+      if (last_ - stamp <= kMaxStepBack)
+        throw InputError("frame stamped " + exact(stamp) + " is not after the previous frame (" +
+                         exact(last_) + "): out of order or repeated");
+      std::cerr << "jpcr_node: the stamps went back by " << last_ - stamp << " s (at "
+                << exact(stamp) << "): a restarted recording or clock; taken as a new time line\n";
     }
     last_ = stamp;
     taken_ = true;
   }
 
  private:
+  static std::string exact(double stamp) {  // as received: sec.nanosec
+    const RosStamp s = to_ros_stamp(stamp);
+    char text[32];
+    std::snprintf(text, sizeof text, "%d.%09u", s.sec, s.nanosec);
+    return text;
+  }
+
   bool taken_ = false;
   double last_ = 0.0;
 };
 
 /// Calls on_input(input) for each `next(slice)` that is not empty, until a stop. An InputError
-/// from on_input skips that input with one log line.
+/// from on_input skips that input with one log line (the first 10, then one per 10 s); a skipped
+/// input is no activity for --idle-timeout.
 template <typename Next, typename OnInput>
 Outcome receive(const StopRules& rules, Next&& next, OnInput&& on_input) {
   constexpr std::chrono::milliseconds kSlice{100};  // signal and idle polling interval
   Outcome out;
   bool received = false;
   Clock::time_point first = Clock::now(), last = first;
+  LogBudget skip_lines;
   while (!cli::stop_requested()) {
     if (rules.max_items > 0 && out.processed >= static_cast<std::size_t>(rules.max_items)) {
       out.reason = "--max-frames";
       break;
     }
-    auto input = next(kSlice);
-    if (!input) {
-      if (received && rules.idle_timeout > 0.0 && seconds_since(last) >= rules.idle_timeout) {
-        out.reason = "--idle-timeout";
-        break;
-      }
-      continue;
+    if (received && rules.idle_timeout > 0.0 && seconds_since(last) >= rules.idle_timeout) {
+      out.reason = "--idle-timeout";
+      break;
     }
-    if (!received) first = Clock::now();
-    received = true;
-    last = Clock::now();
+    auto input = next(kSlice);
+    if (!input) continue;
+    const Clock::time_point arrived = Clock::now();
     try {
-      if (on_input(*input) == Step::kEndOfStream) {
+      const Step step = on_input(*input);
+      if (!received) first = arrived;
+      received = true;
+      last = Clock::now();
+      if (step == Step::kEndOfStream) {
         out.reason = "end of stream";
         break;
       }
@@ -102,7 +116,10 @@ Outcome receive(const StopRules& rules, Next&& next, OnInput&& on_input) {
       out.seconds = seconds_since(first);
     } catch (const InputError& e) {  // e.g. a frame of another size than the first
       ++out.skipped;
-      std::cerr << "jpcr_node: skipped an input: " << e.what() << '\n';
+      std::size_t left_out = 0;
+      if (skip_lines.allow(left_out))
+        std::cerr << "jpcr_node: skipped an input: " << e.what() << LogBudget::note(left_out)
+                  << '\n';
     }
   }
   return out;
