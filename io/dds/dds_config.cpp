@@ -10,7 +10,8 @@ namespace jpcr {
 namespace {
 
 // A DDS topic name as ROS 2 maps one: "rt/" + the ROS name without its leading slash, made of
-// letters, digits, '_' and '/'. A ROS name such as /camera/depth would match nothing, silently.
+// letters, digits, '_' and '/' (what Cyclone accepts: it refuses '.', '-' or a leading digit with
+// "Bad Parameter"). A ROS name such as /camera/depth would match nothing, silently.
 void check_topic(const std::string& field, const std::string& name) {
   if (name.empty()) throw InputError(field + ": must not be empty");
   if (name.front() == '/') {
@@ -24,6 +25,8 @@ void check_topic(const std::string& field, const std::string& name) {
                        "' holds a character other than letters, digits, '_' and '/'");
     }
   }
+  if (name.front() >= '0' && name.front() <= '9')
+    throw InputError(field + ": '" + name + "' starts with a digit");
   if (name.find("//") != std::string::npos) throw InputError(field + ": '" + name + "' holds '//'");
 }
 

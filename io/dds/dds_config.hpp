@@ -37,7 +37,8 @@ struct DdsConfig {
   int keyframe_queue = 32;            // keyframes a split back end holds unread (MB each)
   bool input_reliable = true;         // depth input QoS: reliable (ROS default) or best effort
   // MiB, larger claimed images are rejected unread. Cyclone reassembles a sample before jpcr
-  // sees it: its MaxSampleSize (65 MiB in configs/cyclonedds_loopback.xml) bounds that memory.
+  // sees it: its MaxSampleSize bounds that memory (65 MiB in configs/cyclonedds_loopback.xml;
+  // Cyclone's default is about 2 GiB, so a network configuration should set it too).
   double max_image_megabytes = 64.0;
   int max_image_side = 16384;         // pixels, larger claimed width or height is rejected
 

@@ -125,7 +125,13 @@ RosStamp to_ros_stamp(double seconds) {
 double to_seconds(const RosStamp& stamp) {
   const double seconds =
       static_cast<double>(stamp.sec) + static_cast<double>(stamp.nanosec) / kNanosecondsPerSecond;
-  stamp_memory().remember(seconds, stamp);
+  // Remembered normalised (nanosec < 1e9), as to_ros_stamp gives every other value: a malformed
+  // {5, 1.5e9} is {6, 5e8}.
+  constexpr std::uint32_t kPerSecond = 1000000000u;
+  RosStamp normal = stamp;
+  normal.sec += static_cast<std::int32_t>(stamp.nanosec / kPerSecond);
+  normal.nanosec = stamp.nanosec % kPerSecond;
+  stamp_memory().remember(seconds, normal);
   return seconds;
 }
 

@@ -64,6 +64,14 @@ TEST(RosStamp, AReceivedStampComesBackExactly) {
   EXPECT_GT(lost_by_rounding, 900);  // the case this guards (measured: 99.6 % of random stamps)
 }
 
+// A malformed stamp (nanosec of 1e9 or more) comes back normalised, as any other.
+TEST(RosStamp, AnUnnormalisedStampComesBackNormalised) {
+  const RosStamp odd{1700000005, 1500000000u};
+  const RosStamp back = to_ros_stamp(to_seconds(odd));
+  EXPECT_EQ(back.sec, 1700000006);
+  EXPECT_EQ(back.nanosec, 500000000u);
+}
+
 // The least recently used stamp is forgotten first, and a value never converted is rounded.
 TEST(RosStamp, TheMemoryKeepsTheStampsUsedLast) {
   const RosStamp kept{1800000000, 123456789}, dropped{1800000001, 987654321};

@@ -65,6 +65,7 @@ expect 2 "rate must be in 0.001..1e6" -- "$play" --dataset "$tum" --rate 1e-12
 expect 2 "wait-subscribers must be 0..86400" -- "$play" --dataset "$tum" --wait-subscribers 1e10
 expect 2 "domain must be in 0..232" -- "$echo_bin" rt/x --domain 300
 expect 2 "TOPIC '/jpcr/odom' is a ROS name; its DDS topic is 'rt/jpcr/odom'" -- "$echo_bin" /jpcr/odom
+expect 2 "TOPIC needs a non-empty value" -- "$echo_bin" ""
 expect 2 "type must be odom, pose, path, image, camera_info or keyframe, got 'twist'" -- \
   "$echo_bin" rt/x --type twist
 expect 1 "error: .*nosuch" -- "$play" --dataset "$tmp/nosuch"

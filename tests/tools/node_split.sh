@@ -98,11 +98,11 @@ grep -q "stopped by signal" "$tmp/back3.txt" && [ $rc = 0 ] ||
   { echo "FAIL: back end SIGTERM: exit $rc"; cat "$tmp/back3.txt"; fail=1; }
 
 # Ctrl-C under a launcher arrives twice (from the terminal and from the launcher): two SIGINTs
-# 0.3 s apart still stop the front end cleanly, here while its shutdown waits --flush-timeout for
-# a stopped back end (the second SIGINT used to kill it).
+# 0.3 s apart still stop the front end cleanly, here while its shutdown waits up to
+# --flush-timeout (3 s) for a stopped back end (the second SIGINT used to kill it).
 "$node" --role backend "${dds[@]}" > "$tmp/back6.txt" 2>&1 &
 back_pid=$!; pids+=($back_pid)
-"$node" --role frontend "${dds[@]}" --flush-timeout 3000 > "$tmp/front6.txt" 2>&1 &
+"$node" --role frontend "${dds[@]}" --flush-timeout 3 > "$tmp/front6.txt" 2>&1 &
 front_pid=$!; pids+=($front_pid)
 sleep 1.5; kill -STOP $back_pid
 kill -INT $front_pid; sleep 0.3; kill -INT $front_pid

@@ -78,7 +78,9 @@ bool Arguments::parse(int argc, char** argv, int first) {
     }
     if (next_positional >= positionals_.size())
       throw UsageError("unexpected argument '" + arg + "'");
-    values_[positionals_[next_positional++].first] = arg;
+    const std::string& name = positionals_[next_positional++].first;
+    if (arg.empty()) throw UsageError(name + " needs a non-empty value");
+    values_[name] = arg;
   }
   for (const auto& [name, spec] : specs_) {
     if (spec.required && !values_.count(name)) throw UsageError("--" + name + " is required");

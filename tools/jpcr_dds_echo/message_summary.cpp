@@ -1,5 +1,6 @@
 #include "jpcr_dds_echo/message_summary.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -93,11 +94,15 @@ std::string summarize(const RosImage& m) {
          " bytes=" + std::to_string(m.data._length) + image_content(v);
 }
 
+// The intrinsics jpcr reads (decode_camera_info): P's, the rectified camera's, or K's when P is
+// all zero; " (K)" marks the second.
 std::string summarize(const RosCameraInfoMsg& m) {
+  const bool has_p = std::any_of(m.p, m.p + 12, [](double v) { return v != 0.0; });
+  const std::string intrinsics =
+      has_p ? format(" fx=%.3f fy=%.3f cx=%.3f cy=%.3f", m.p[0], m.p[5], m.p[2], m.p[6])
+            : format(" fx=%.3f fy=%.3f cx=%.3f cy=%.3f (K)", m.k[0], m.k[4], m.k[2], m.k[5]);
   std::string s = header("camera_info", m.header) + " " + std::to_string(m.width) + "x" +
-                  std::to_string(m.height) +
-                  format(" fx=%.3f fy=%.3f cx=%.3f cy=%.3f", m.k[0], m.k[4], m.k[2], m.k[5]) +
-                  " model=" + text(m.distortion_model);
+                  std::to_string(m.height) + intrinsics + " model=" + text(m.distortion_model);
   try {
     decode_camera_info(camera_info_of(m), {});
   } catch (const InputError& e) {
