@@ -32,15 +32,15 @@ struct DdsConfig {
   std::string camera_info_topic = "rt/camera/depth/camera_info";  // input sensor_msgs/CameraInfo
   std::string world_frame_id = "map";                             // header.frame_id of poses
   std::string camera_frame_id = "camera_depth_optical_frame";     // odom child, image frames
-  int history_depth = 10;             // samples, KEEP_LAST depth of the volatile topics
-  int image_history_depth = 2;        // samples, KEEP_LAST depth of image topics (MB each)
-  int keyframe_queue = 32;            // keyframes a split back end holds unread (MB each)
-  bool input_reliable = true;         // depth input QoS: reliable (ROS default) or best effort
+  int history_depth = 10;       // samples, KEEP_LAST depth of the volatile topics
+  int image_history_depth = 2;  // samples, KEEP_LAST depth of image topics (MB each)
+  int keyframe_queue = 32;      // keyframes a split back end holds unread (MB each)
+  bool input_reliable = true;   // depth input QoS: reliable (ROS default) or best effort
   // MiB, larger claimed images are rejected unread. Cyclone reassembles a sample before jpcr
   // sees it: its MaxSampleSize bounds that memory (65 MiB in configs/cyclonedds_loopback.xml;
   // Cyclone's default is about 2 GiB, so a network configuration should set it too).
   double max_image_megabytes = 64.0;
-  int max_image_side = 16384;         // pixels, larger claimed width or height is rejected
+  int max_image_side = 16384;  // pixels, larger claimed width or height is rejected
 
   /// Throws InputError "field: problem" on a value out of range.
   void validate() const;

@@ -19,6 +19,7 @@ namespace {
 struct ReceivedImage {
   RosImageBuffer image;
   RosStamp stamp;
+  std::string frame_id;
   std::string problem;
 };
 
@@ -65,6 +66,10 @@ struct DdsDepthSubscriber::State {
       ReceivedImage r;
       const RosImageView view = image_view_of(m);
       r.stamp = stamp_of(m.header);
+      try {
+        if (m.header.frame_id != nullptr) r.frame_id = m.header.frame_id;
+      } catch (const std::exception&) {  // bad_alloc: nothing may leave Cyclone's thread
+      }
       try {
         check_image_layout(view, {{"16UC1", 2}, {"32FC1", 4}}, s.limits);
         r.image.height = view.height;
@@ -135,6 +140,7 @@ struct DdsDepthSubscriber::State {
   // The caller's thread only.
   std::optional<CameraIntrinsics> camera;
   std::deque<Frame> frames;
+  std::deque<std::string> frame_ids;  // header.frame_id of each of `frames`
   // Declared last, deleted first: no callback runs once the members above go.
   Listener camera_listener, depth_listener;
   DdsReader<RosCameraInfoMsg> camera_info;
@@ -242,6 +248,7 @@ void DdsDepthSubscriber::process() {
     }
     try {
       s.frames.push_back(decode_depth_frame(r.image.view(), r.stamp, *s.camera, s.limits));
+      s.frame_ids.push_back(r.frame_id);
       ++frames_;
     } catch (const InputError& e) {
       reject(config_.depth_topic, e.what());
@@ -285,6 +292,8 @@ std::optional<Frame> DdsDepthSubscriber::wait_frame(std::chrono::milliseconds ti
     if (!s.frames.empty()) {
       Frame f = std::move(s.frames.front());
       s.frames.pop_front();
+      frame_id_ = std::move(s.frame_ids.front());
+      s.frame_ids.pop_front();
       return f;
     }
     std::unique_lock<std::mutex> lock(s.mutex);

@@ -45,6 +45,9 @@ class DdsDepthSubscriber {
   /// arrives before any camera_info waits (in the queue) for one.
   std::optional<Frame> wait_frame(std::chrono::milliseconds timeout);
 
+  /// header.frame_id of the depth image of the frame wait_frame returned last ("" before one).
+  const std::string& frame_id() const { return frame_id_; }
+
   std::size_t frames_received() const { return frames_; }
   std::size_t samples_rejected() const { return rejected_; }
   /// Depth images dropped from the full queue before the caller asked for them, plus those
@@ -63,6 +66,7 @@ class DdsDepthSubscriber {
   std::ostream* log_;
   std::unique_ptr<State> state_;
   std::size_t frames_ = 0;
+  std::string frame_id_;
   std::size_t rejected_ = 0;
   std::size_t dropped_seen_ = 0;         // the drops process() has looked at
   std::size_t dropped_logged_ = 0;       // ... and those a log line counted

@@ -65,6 +65,11 @@ class DdsKeyframeWriter {
   bool publish(const Frame& frame, const StampedPose& pose, const Matrix6d& covariance,
                int frame_index, const Trajectory& tracked,
                const KeepWaiting& keep_waiting = {}) const;
+  /// The camera frame the keyframes' depth and camera_info carry (the received depth's); an
+  /// empty `id` keeps the current one (DdsConfig::camera_frame_id at first).
+  void set_camera_frame_id(const std::string& id) {
+    if (!id.empty()) config_.camera_frame_id = id;
+  }
   /// The end-of-stream marker: `frames` tracked in all, `tracked` after the last keyframe.
   bool publish_end(int frames, const Trajectory& tracked,
                    const KeepWaiting& keep_waiting = {}) const;

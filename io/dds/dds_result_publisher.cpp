@@ -84,6 +84,10 @@ void DdsResultPublisher::publish_path(const Trajectory& trajectory) {
   writers_->path.write(path.message());
 }
 
+void DdsResultPublisher::set_camera_frame_id(const std::string& id) {
+  if (!id.empty()) config_.camera_frame_id = id;
+}
+
 bool DdsResultPublisher::flush(std::chrono::milliseconds timeout) const {
   const Writers& w = *writers_;
   return w.odometry.wait_for_acks(timeout) && w.keyframe_pose.wait_for_acks(timeout) &&

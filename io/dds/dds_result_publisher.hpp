@@ -7,8 +7,9 @@
 //   curvature        sensor_msgs/Image 32FC2   reliable, volatile, keep last image_history_depth
 //   curvature_color  sensor_msgs/Image rgb8    reliable, volatile, keep last image_history_depth
 //
-// Poses are T_wc (camera to world) with header.frame_id = world_frame_id; images carry
-// camera_frame_id. Thread-compatible: one thread per publisher.
+// Poses are T_wc (camera to world) with header.frame_id = world_frame_id; images and odom's child
+// frame carry the camera frame: camera_frame_id until set_camera_frame_id names the received
+// depth's. Thread-compatible: one thread per publisher.
 #pragma once
 
 #include <chrono>
@@ -50,6 +51,11 @@ class DdsResultPublisher {
                         const ColorImage& color);
   /// The refined trajectory (all keyframes); late subscribers receive the last one.
   void publish_path(const Trajectory& trajectory);
+
+  /// The camera frame of what follows (odom's child frame, the images' frame_id): the received
+  /// depth's header.frame_id, so that results sit in the camera's own tf frame. An empty `id`
+  /// keeps the current one (DdsConfig::camera_frame_id at first).
+  void set_camera_frame_id(const std::string& id);
 
   /// Waits until reliable readers acknowledged every sample of every topic (before exiting).
   bool flush(std::chrono::milliseconds timeout) const;

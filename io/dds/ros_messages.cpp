@@ -242,6 +242,7 @@ DecodedKeyframe decode_keyframe(const RosKeyframe& message, const RosImageLimits
   k.frame = decode_depth_frame(image_view_of(message.depth), stamp_of(message.depth.header), camera,
                                limits);
   k.pose = StampedPose{k.frame.timestamp, pose_of(message.pose.pose)};
+  if (message.depth.header.frame_id != nullptr) k.camera_frame_id = message.depth.header.frame_id;
   k.covariance = covariance_of(message.pose.covariance);
   check_keyframe_covariance(k.covariance);
   return k;

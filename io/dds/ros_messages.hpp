@@ -116,6 +116,7 @@ struct DecodedKeyframe {
   int frame_index = 0;
   Trajectory tracked;  // the frames frame_index - tracked.size() ... frame_index - 1
   bool end_of_stream = false;
+  std::string camera_frame_id;  // the depth's header.frame_id
 };
 DecodedKeyframe decode_keyframe(const RosKeyframe& message, const RosImageLimits& limits);
 

@@ -195,6 +195,7 @@ TEST_F(DdsResults, KeyframeMessageRoundTrips) {
   expect_same_pose(got->pose.pose, some_pose(7.5).pose);
   EXPECT_EQ(got->covariance, cov);
   EXPECT_EQ(got->frame_index, 9);
+  EXPECT_EQ(got->camera_frame_id, "cam");  // the back end publishes in the camera's frame
   ASSERT_EQ(got->tracked.size(), 2u);
   EXPECT_EQ(got->tracked[1].timestamp, 7.0);
   expect_same_pose(got->tracked[1].pose, tracked[1].pose);

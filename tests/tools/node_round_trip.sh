@@ -81,19 +81,28 @@ expect_node $idle_pid 60 "$tmp/idle.txt" "processed 2 frames.*skipped 2 frames.*
 n=$(grep -c "skipped an input: frame stamped .* is not after the previous frame" "$tmp/idle.txt")
 [ "$n" = 2 ] || { echo "FAIL: $n out-of-order lines, want 2"; cat "$tmp/idle.txt"; fail=1; }
 # A step back of more than a second is a new time line (a restarted recording): taken, said once.
+# The camera here names its own frame: odom's child frame is the depth's header.frame_id.
 printf 'synthetic:\n  trajectory:\n    rate: 0.5\n' > "$tmp/slow.yaml"
 expect 0 "wrote 2 frames" -- "$synth" --scene room_spheres --frames 2 --size 160x120 --seed 4 \
   --params "$tmp/slow.yaml" --out "$tmp/slow"
+cp "$tmp/dds.yaml" "$tmp/robot1.yaml"
+printf '  camera_frame_id: robot1/depth_optical\n' >> "$tmp/robot1.yaml"
+"$echo_bin" rt/jpcr/odom "${dds[@]}" --count 2 --timeout 120 > "$tmp/reset_odom.txt" 2>&1 &
+reset_echo=$!; pids+=($reset_echo)
 "$node" "${dds[@]}" --method icp-ftf --idle-timeout 6 > "$tmp/reset.txt" 2>&1 &
 reset_pid=$!; pids+=($reset_pid)
 for frames in 1:2 0:1; do
   expect 0 "published 1 frames" -- "$play" --dataset "$tmp/slow" --encoding 32FC1 \
-    --frames $frames --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
+    --frames $frames --as-fast-as-possible --wait-subscribers 15 --params "$tmp/robot1.yaml" \
+    --domain $domain
 done
 expect_node $reset_pid 60 "$tmp/reset.txt" "processed 2 frames.*skipped 0 frames" \
   "a new time line is taken"
 grep -q "the stamps went back by 2 s .*taken as a new time line" "$tmp/reset.txt" ||
   { echo "FAIL: no line about the new time line"; cat "$tmp/reset.txt"; fail=1; }
+wait_bounded $reset_echo 30
+n=$(grep -c "^odom .* child=robot1/depth_optical" "$tmp/reset_odom.txt")
+[ "$n" = 2 ] || { echo "FAIL: $n of 2 odom in the camera's frame"; cat "$tmp/reset_odom.txt"; fail=1; }
 # keep_history: false, an unattended run: J-full windows of 3 (every frame a keyframe) forget
 # each final frame, and every keyframe's map is still published.
 printf 'dds:\n  history_depth: 32\n  image_history_depth: 16\npipeline:\n  keep_history: false\n  window: 3\n' \

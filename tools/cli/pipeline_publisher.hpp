@@ -35,6 +35,8 @@ class PipelinePublisher {
   /// After PipelineBackEnd::finish(): the final path.
   void finished(const PipelineBackEnd& pipeline);
 
+  /// DdsResultPublisher::set_camera_frame_id.
+  void set_camera_frame_id(const std::string& id) { publisher_.set_camera_frame_id(id); }
   bool flush(std::chrono::milliseconds timeout) const { return publisher_.flush(timeout); }
   std::size_t keyframes_published() const { return keyframes_published_; }
 

@@ -62,6 +62,7 @@ int run_all(const NodeOptions& o, const DdsParticipant& participant) {
       o.stop, [&](auto slice) { return subscriber.wait_frame(slice); },
       [&](const Frame& frame) {
         order.take(frame.timestamp);
+        publisher.set_camera_frame_id(subscriber.frame_id());
         const PipelineFrame& f = runner->add(frame);
         publisher.frame_added(*runner, f);
         progress.frame(f, runner->keyframe_count(), subscriber);
@@ -86,7 +87,7 @@ int run_all(const NodeOptions& o, const DdsParticipant& participant) {
 int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
   DdsDepthSubscriber subscriber(participant, o.dds);
   DdsResultPublisher results(participant, o.dds);
-  const DdsKeyframeWriter keyframes(participant, o.dds);
+  DdsKeyframeWriter keyframes(participant, o.dds);
   PipelineFrontEnd front_end(o.pipeline);
   Trajectory tracked;  // the front end's poses of the frames since the last keyframe
   std::size_t sent = 0;
@@ -108,6 +109,8 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
       o.stop, [&](auto slice) { return subscriber.wait_frame(slice); },
       [&](const Frame& frame) {
         order.take(frame.timestamp);
+        results.set_camera_frame_id(subscriber.frame_id());
+        keyframes.set_camera_frame_id(subscriber.frame_id());
         bool keyframe = false;
         const PipelineFrame f = front_end.track(frame, &keyframe);
         results.publish_odometry(
@@ -206,6 +209,7 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
           back_end->add(f, nullptr);
         }
         if (k.end_of_stream) return node::Step::kEndOfStream;
+        publisher.set_camera_frame_id(k.camera_frame_id);
         PipelineFrame f;
         f.index = k.frame_index;
         f.front_end = k.pose;
