@@ -74,20 +74,32 @@ TEST(StagedOutput, WriteRethrowsAFailedWriteNamedByTheTargetAsTheErrorAsked) {
   EXPECT_TRUE(ran);
 }
 
+// An earlier run's outputs in `target`: the file `file` and the folder `folder` with one map.
+void write_earlier_run(const std::string& target, const std::string& file,
+                       const std::string& folder) {
+  fs::create_directories(target + "/" + folder);
+  write(target + "/" + file, "an earlier run's " + file);
+  write(target + "/" + folder + "/old.npy", "an earlier run's map");
+}
+
+// Both are still there, unchanged.
+void expect_earlier_run(const std::string& target, const std::string& file,
+                        const std::string& folder) {
+  EXPECT_EQ(read_file(target + "/" + file), "an earlier run's " + file);
+  EXPECT_EQ(read_file(target + "/" + folder + "/old.npy"), "an earlier run's map");
+}
+
 TEST(StagedOutput, AFailedRunLeavesTheTargetAsItWas) {
   test::TempDir dir;
   const std::string target = dir.file("run");
-  fs::create_directories(target + "/maps");
-  write(target + "/a.txt", "old");
-  write(target + "/maps/1.npy", "old map");
+  write_earlier_run(target, "a.txt", "maps");
   try {
     StagedOutput out(target, {"a.txt", "maps"});
     write(out.path("a.txt"), "half");
     throw std::runtime_error("the run fails");
   } catch (const std::runtime_error&) {
   }
-  EXPECT_EQ(read_file(target + "/a.txt"), "old");
-  EXPECT_EQ(read_file(target + "/maps/1.npy"), "old map");
+  expect_earlier_run(target, "a.txt", "maps");
   EXPECT_EQ(entries(dir.path()), 1);  // the staging directory is gone
 }
 
@@ -128,9 +140,7 @@ void unpin(const std::string& path) {
 TEST(StagedOutput, ACommitThatCannotReplaceAnEntryLeavesTheTargetAsItWas) {
   test::TempDir dir;
   const std::string target = dir.file("run");
-  fs::create_directories(target + "/curvature");
-  write(target + "/a_report.json", "an earlier run's report");
-  write(target + "/curvature/old.npy", "an earlier run's map");
+  write_earlier_run(target, "a_report.json", "curvature");
   if (!pin(target + "/curvature")) GTEST_SKIP() << "no immutable attribute on this file system";
   StagedOutput out(target, {"a_report.json", "curvature"});
   write(out.path("a_report.json"), "this run's report");
@@ -146,8 +156,7 @@ TEST(StagedOutput, ACommitThatCannotReplaceAnEntryLeavesTheTargetAsItWas) {
     EXPECT_NE(std::string(e.what()).find(target + "/curvature: cannot replace"), std::string::npos)
         << e.what();
   }
-  EXPECT_EQ(read_file(target + "/a_report.json"), "an earlier run's report");
-  EXPECT_EQ(read_file(target + "/curvature/old.npy"), "an earlier run's map");
+  expect_earlier_run(target, "a_report.json", "curvature");
   EXPECT_FALSE(fs::exists(target + "/curvature/new.npy"));
 }
 
