@@ -10,4 +10,15 @@ Trajectory FrameSource::ground_truth_trajectory() const {
   return trajectory;
 }
 
+Trajectory FrameSource::recorded_ground_truth(std::size_t first, std::size_t last,
+                                              double max_difference) const {
+  Trajectory trajectory;
+  if (first >= last || last > size()) return trajectory;
+  const double begin = timestamp(first) - max_difference,
+               end = timestamp(last - 1) + max_difference;
+  for (const StampedPose& p : recorded_ground_truth())
+    if (p.timestamp >= begin && p.timestamp <= end) trajectory.push_back(p);
+  return trajectory;
+}
+
 }  // namespace jpcr

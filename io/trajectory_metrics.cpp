@@ -141,6 +141,9 @@ RelativeErrors compute_relative_errors(const Trajectory& ground_truth, const Tra
   RelativeErrors result;
   double sum_t = 0.0, sum_r = 0.0;
   for (std::size_t k = 1; k < matches.size(); ++k) {
+    // Consecutive estimates only: across a pose without ground truth (a gap in the motion
+    // capture) the pair would be a longer motion, counted as one frame's.
+    if (matches[k].second != matches[k - 1].second + 1) continue;
     const Eigen::Isometry3d gt_motion =
         ominus(ground_truth[matches[k - 1].first].pose, ground_truth[matches[k].first].pose);
     const Eigen::Isometry3d est_motion =

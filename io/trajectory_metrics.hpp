@@ -57,6 +57,9 @@ struct RelativeErrors {
   std::vector<std::pair<std::size_t, std::size_t>> ground_truth_frames;
 };
 
+/// The paper's relative error: per pair of consecutive estimate poses that both have ground
+/// truth within max_difference (s), the error of the estimated motion. A pair that spans an
+/// estimate pose without ground truth is left out. `estimate` is in time order.
 RelativeErrors compute_relative_errors(const Trajectory& ground_truth, const Trajectory& estimate,
                                        double max_difference = 0.02);
 

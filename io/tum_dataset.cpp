@@ -101,7 +101,8 @@ TumDataset::TumDataset(const std::string& directory, const CameraIntrinsics& cam
   ground_truth_.assign(depth_.size(), std::nullopt);
   const fs::path gt_path = dir / "groundtruth.txt";
   if (fs::exists(gt_path, ec)) {
-    const Trajectory gt = read_trajectory(gt_path.string());
+    recorded_ground_truth_ = read_trajectory(gt_path.string());
+    const Trajectory& gt = recorded_ground_truth_;
     std::vector<double> gt_stamps;
     for (const StampedPose& p : gt)
       gt_stamps.push_back(p.timestamp);

@@ -29,6 +29,9 @@ class TumDataset final : public FrameSource {
   double timestamp(std::size_t index) const override { return depth_.at(index).timestamp; }
   Frame load(std::size_t index) const override;
   std::optional<Eigen::Isometry3d> ground_truth(std::size_t index) const override;
+  /// groundtruth.txt as read (empty without one).
+  Trajectory recorded_ground_truth() const override { return recorded_ground_truth_; }
+  using FrameSource::recorded_ground_truth;
   const CameraIntrinsics& camera() const override { return camera_; }
   std::string description() const override;
 
@@ -44,6 +47,7 @@ class TumDataset final : public FrameSource {
   std::vector<ListEntry> depth_;
   std::vector<std::optional<std::string>> color_;  // per depth frame
   std::vector<std::optional<Eigen::Isometry3d>> ground_truth_;
+  Trajectory recorded_ground_truth_;
   std::unique_ptr<Undistortion> undistortion_;
 };
 

@@ -89,6 +89,22 @@ TEST(Metrics, RpeAndRelativeErrorsHandComputedSinglePerturbation) {
   EXPECT_NEAR(rel.translation_rms, 0.005 * std::sqrt(2.0 / 9.0), 1e-12);
 }
 
+// Ground truth missing for frames 4 and 5: the pairs (3, 4), (4, 5) and (5, 6) are left out,
+// and (3, 6), a motion of three frames, is not counted as one frame's.
+TEST(Metrics, RelativeErrorsSkipPairsAcrossAGroundTruthGap) {
+  const Trajectory full = make_trajectory(10);
+  Trajectory gt;
+  for (std::size_t i = 0; i < full.size(); ++i)
+    if (i != 4 && i != 5) gt.push_back(full[i]);
+  Trajectory est = full;
+  est[6].pose.pretranslate(Eigen::Vector3d(0.0, 0.0, 0.01));  // moves pairs (5, 6) and (6, 7)
+  const RelativeErrors rel = compute_relative_errors(gt, est);
+  EXPECT_EQ(rel.pairs, 6u);
+  // Of pairs (6, 7) [error 1 cm] and (3, 6) [left out], only (6, 7) counts: 1 cm in 6 pairs
+  // (counting (3, 6) gives 1 cm in two of 7).
+  EXPECT_NEAR(rel.translation_rms, 0.01 / std::sqrt(6.0), 1e-12);
+}
+
 TEST(Metrics, RpePerSecondPairsFramesOneSecondApart) {
   // 30 Hz for 3 s (90 frames): pairs (i, i+30). The estimate drifts in yaw about the world
   // origin at ω rad/s, e_k = Rz(ω s_k) g_k. The TUM error of a pair is then g_i⁻¹ Rz(ω) g_i, a

@@ -1,12 +1,15 @@
 // The TUM directory reader on the real fr1/xyz slice in tests/data, and every kind of bad input
 // the foundation issue lists: each is one clear InputError naming the file (and line).
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/depth_png.hpp"
+#include "jpcr/io/trajectory_metrics.hpp"
 #include "jpcr/io/tum_dataset.hpp"
 #include "jpcr/quadric/error.hpp"
 #include "jpcr/quadric/vertex_map.hpp"
@@ -72,6 +75,50 @@ TEST(TumDataset, LoadsRealFr1FramesWithGroundTruth) {
   const Eigen::Vector3d t0 = dataset.ground_truth(0)->translation();
   EXPECT_NEAR(t0.x(), 1.3452, 1e-9);
   EXPECT_EQ(dataset.ground_truth_trajectory().size(), 20u);
+}
+
+// A gap in the motion capture (no ground truth within 20 ms of frame 10): the recorded ground
+// truth keeps it, so RPE skips the two frame pairs that touch frame 10, as TUM's
+// evaluate_rpe.py does. The ground truth re-stamped at the frames has no line for frame 10
+// either, but RPE's tolerance there (twice the median interval, 67 ms) gives frame 10 frame 9's
+// or 11's pose: 18 pairs instead of 16.
+TEST(TumDataset, RecordedGroundTruthKeepsItsGapsForTheMetrics) {
+  const test::TempDir dir;
+  fs::copy(kFr1, dir.path(), fs::copy_options::recursive | fs::copy_options::overwrite_existing);
+  const CameraIntrinsics fr1 =
+      load_camera_yaml(std::string(JPCR_SOURCE_DIR) + "/configs/tum_fr1.yaml");
+  const double t10 = TumDataset(dir.path(), fr1).timestamp(10);
+  std::ifstream in(dir.file("groundtruth.txt"));
+  std::ostringstream kept;
+  int removed = 0;
+  for (std::string line; std::getline(in, line);) {
+    if (line.empty() || line[0] == '#' || std::abs(std::stod(line) - t10) >= 0.02)
+      kept << line << '\n';
+    else
+      ++removed;
+  }
+  ASSERT_GT(removed, 2);
+  dir.write("groundtruth.txt", kept.str());
+
+  const TumDataset dataset(dir.path(), fr1);
+  EXPECT_FALSE(dataset.ground_truth(10));
+  const Trajectory recorded = dataset.recorded_ground_truth();
+  EXPECT_EQ(recorded.size(), 73u - static_cast<std::size_t>(removed));
+  // The range of frames 2..4 takes the recorded poses from 20 ms before frame 2 to 20 ms after 4.
+  const Trajectory part = dataset.recorded_ground_truth(2, 5);
+  ASSERT_FALSE(part.empty());
+  EXPECT_GE(part.front().timestamp, dataset.timestamp(2) - 0.02);
+  EXPECT_LE(part.back().timestamp, dataset.timestamp(4) + 0.02);
+  EXPECT_LT(part.size(), recorded.size());
+
+  Trajectory estimate;  // any pose at every frame, frame 10 included
+  for (std::size_t i = 0; i < dataset.size(); ++i)
+    estimate.push_back({dataset.timestamp(i), Eigen::Isometry3d::Identity()});
+  EXPECT_EQ(compute_rpe(recorded, estimate, 1.0, DeltaUnit::kFrames).translation.count, 16u);
+  EXPECT_EQ(compute_rpe(dataset.ground_truth_trajectory(), estimate, 1.0, DeltaUnit::kFrames)
+                .translation.count,
+            18u);
+  EXPECT_EQ(compute_relative_errors(recorded, estimate).pairs, 17u);
 }
 
 TEST(TumDataset, DistortionIsRemovedWithNearestNeighbour) {

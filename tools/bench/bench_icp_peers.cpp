@@ -136,7 +136,7 @@ int run(int argc, char** argv) {
     if (limit < 0) throw cli::UsageError("--frames must be >= 0");
     if (limit > 0) frames = std::min<std::size_t>(frames, limit);
     if (frames < 3) throw InputError(args.get("dataset") + ": fewer than 3 frames");
-    const Trajectory gt = source->ground_truth_trajectory();
+    const Trajectory gt = source->recorded_ground_truth(0, frames);
     const Eigen::Isometry3d start = source->ground_truth(0).value_or(Eigen::Isometry3d::Identity());
     KeyframeTracker tracker(params, start);
     const int jpcr_threads = tracker.threads();

@@ -178,10 +178,8 @@ int run_main(int argc, char** argv) {
 #endif
 
     const Trajectory refined = runner.trajectory();
-    Trajectory gt;
-    for (std::size_t i = range.first; i < range.last; ++i)
-      if (const std::optional<Eigen::Isometry3d> T = dataset->ground_truth(i))
-        gt.push_back({dataset->timestamp(i), *T});
+    // As recorded (TUM: groundtruth.txt), so that report.json's numbers are jpcr_eval's.
+    const Trajectory gt = dataset->recorded_ground_truth(range.first, range.last);
     const auto front_errors = run::evaluate(gt, runner.front_end_trajectory());
     const auto errors = run::evaluate(gt, refined);
     out.write([&] {
