@@ -13,9 +13,10 @@ namespace jpcr {
 
 namespace {
 
-// Tells smooth patches apart for the footprint test: surface index and face (< 8 per surface).
+// Tells smooth patches apart for the footprint test: surface index, face (< 8 per surface) and
+// side: an open tube's outside and inside are one face, but its rim is a crease between them.
 std::int32_t patch_id(const std::optional<SurfaceHit>& hit) {
-  return hit ? hit->surface * 8 + hit->patch : -1;
+  return hit ? (hit->surface * 8 + hit->patch) * 2 + (hit->inside ? 1 : 0) : -1;
 }
 
 }  // namespace
@@ -96,6 +97,18 @@ SyntheticFrame render(const SyntheticScene& scene, const CameraIntrinsics& camer
     }
   }
   out.frame.depth = add_depth_noise(out.exact_depth, out.normals, camera, noise, seed, frame_index);
+  // Ground truth only where there is a measurement: not at a dropout of the noise model, nor
+  // past what a depth PNG holds (65535 / depth_scale, 13.1 m at 5000 per metre), where the
+  // written depth is 0. A method can return nothing there, and its coverage should not count it.
+  const float max_depth = static_cast<float>(65535.0 / camera.depth_scale);
+  for (std::size_t i = 0; i < out.frame.depth.size(); ++i) {
+    float& z = out.frame.depth[i];
+    if (z > max_depth) z = 0.0f;
+    if (z <= 0.0f && out.surface[i] >= 0) {
+      out.curvature[i] = Eigen::Vector2f(nan, nan);
+      out.normals[i] = invalid_vector();
+    }
+  }
   out.frame.color = shade_normals(out.normals);
   return out;
 }

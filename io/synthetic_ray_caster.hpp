@@ -19,18 +19,20 @@
 namespace jpcr {
 
 struct SyntheticFrame {
-  /// Timestamp, noisy depth (m, 0 = no measurement), the camera, and colour shaded by normal.
+  /// Timestamp, noisy depth (m, 0 = no measurement: a dropout of the noise model, or beyond
+  /// what a depth PNG holds, 65535 / depth_scale), the camera, and colour shaded by normal.
   Frame frame;
   Eigen::Isometry3d pose_wc = Eigen::Isometry3d::Identity();  // exact camera-to-world pose
   DepthImage exact_depth;  // noise-free z (m), 0 where the ray hits nothing
   /// Principal curvatures κ1 ≥ κ2 (1/m) with method.md §1's sign (normal toward the camera, a
-  /// surface bulging toward the camera is negative). NaN where the ray hits nothing, and where
-  /// the pixel's footprint is not one smooth patch — the rays through its four corners hit
-  /// another surface or face than its centre (box edges, cylinder rims, silhouettes) — since
-  /// curvature is undefined on a crease. The footprint test does not see a surface occluding
-  /// another part of itself (e.g. a torus), where the centre value is still exact.
+  /// surface bulging toward the camera is negative). NaN where the depth has no measurement,
+  /// and where the pixel's footprint is not one smooth patch — the rays through its four
+  /// corners hit another surface, face or side than its centre (box edges, cylinder rims, the
+  /// rim of an open tube between its outside and inside, silhouettes) — since curvature is
+  /// undefined on a crease. The footprint test does not see a surface occluding another part
+  /// of itself (e.g. a torus), where the centre value is still exact.
   CurvatureImage curvature;
-  NormalMap normals;            // camera frame, unit, toward the camera; NaN where none
+  NormalMap normals;  // camera frame, unit, toward the camera; NaN where no depth is measured
   Image<std::int32_t> surface;  // index into scene.surfaces, −1 where none
 };
 

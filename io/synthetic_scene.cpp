@@ -150,6 +150,7 @@ std::optional<SurfaceHit> nearest_hit(const SyntheticScene& scene, const Ray& ra
   } else {
     // The camera sees the inside (or back): turning the normal around negates the curvatures,
     // and κ1 ≥ κ2 swaps them (method.md §1: the inside of a bowl is positive).
+    hit.inside = true;
     hit.normal = -nearest->outward_normal;
     hit.curvature = Eigen::Vector2d(-nearest->curvature.y(), -nearest->curvature.x());
   }

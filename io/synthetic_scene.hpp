@@ -57,8 +57,9 @@ struct SurfaceHit {
   /// κ1 ≥ κ2 (1/m) about `normal`, method.md §1: a ball seen from outside gives −1/R, its inside
   /// +1/R; a cylinder (0, −1/R) from outside; a plane (0, 0).
   Eigen::Vector2d curvature = Eigen::Vector2d::Zero();
-  int surface = -1;  // index into SyntheticScene::surfaces
-  int patch = 0;     // smooth piece of that surface (box face, cylinder side or cap)
+  int surface = -1;     // index into SyntheticScene::surfaces
+  int patch = 0;        // smooth piece of that surface (box face, cylinder side or cap)
+  bool inside = false;  // the ray met the surface's inner side (a room's walls, a tube's inside)
 };
 
 /// The nearest hit with range > t_min over all surfaces of the scene.

@@ -1,5 +1,6 @@
 // A synthetic RGB-D sequence as a FrameSource: frames are ray-traced on demand, in memory, so any
-// tool or test runs on generated data exactly as on a TUM directory, with exact ground truth.
+// tool or test runs on generated data as on a TUM directory, with exact ground truth. The
+// depth is not rounded to the PNG's 1 / depth_scale steps (0.2 mm) as a written sequence's is.
 //
 //   SyntheticSequenceOptions options;          // room_spheres, walk, 640x480, no noise
 //   options.frames = 30;

@@ -91,6 +91,64 @@ TEST(SyntheticRender, CylinderSideIsZeroMinusOneOverRAndTheRoomIsFlat) {
   EXPECT_GT(flat, 1000);
 }
 
+// An open tube seen at an angle shows its outside and, through the open end, its inside: one
+// face of one surface, but the rim between them is a crease (curvature (0, −1/R) outside,
+// (1/R, 0) inside). Two neighbouring pixels share two footprint corners, so no two with
+// curvature may be of opposite sides.
+TEST(SyntheticRender, TheRimOfAnOpenTubeIsACrease) {
+  const double R = 0.3;
+  const Cylinder tube{{0, 0, 1.0}, {0, 1, 0}, R, 1.0, false};  // its axis points at the camera
+  const Eigen::Isometry3d T = pose({0.6, -2.0, 1.5}, {0, 0, 1.0});
+  const SyntheticFrame f = render(room_with(tube), kCamera, T);
+  // +1 outside, −1 inside (the normal, toward the camera, along or against the radius), 0 not
+  // the tube.
+  const auto side = [&](int u, int v) {
+    if (f.surface(u, v) != 1) return 0;
+    const Eigen::Vector3d X = T * backproject<double>(u, v, f.exact_depth(u, v), kCamera.fx,
+                                                      kCamera.fy, kCamera.cx, kCamera.cy);
+    Eigen::Vector3d radius = X - tube.center;
+    radius -= radius.dot(tube.axis) * tube.axis;
+    return (T.linear() * f.normals(u, v).cast<double>()).dot(radius) > 0.0 ? 1 : -1;
+  };
+  int outside = 0, inside = 0, touching = 0;
+  for (int v = 1; v + 1 < kCamera.height; ++v)
+    for (int u = 1; u + 1 < kCamera.width; ++u) {
+      const int s = side(u, v);
+      outside += s > 0;
+      inside += s < 0;
+      if (s == 0 || std::isnan(f.curvature(u, v).x())) continue;
+      for (const auto& [du, dv] : {std::pair{1, 0}, {-1, 0}, {0, 1}, {0, -1}})
+        touching += side(u + du, v + dv) == -s && !std::isnan(f.curvature(u + du, v + dv).x());
+    }
+  EXPECT_GT(outside, 100);
+  EXPECT_GT(inside, 100);
+  EXPECT_EQ(touching, 0);
+}
+
+// Ground truth only where the depth is measured: at the Kinect model's dropouts, and past what
+// a depth PNG holds (65535 / 5000 = 13.1 m: a wall at 15 m), curvature and normal are NaN.
+TEST(SyntheticRender, NoGroundTruthWhereTheDepthHasNoMeasurement) {
+  SyntheticScene far;
+  far.surfaces = {Plane{{0, 15.0, 0}, {0, -1, 0}}};
+  const SyntheticFrame f = render(far, kCamera, pose({0, 0, 0}, {0, 1, 0}));
+  for (std::size_t i = 0; i < f.frame.depth.size(); ++i) {
+    ASSERT_EQ(f.surface[i], 0);
+    EXPECT_EQ(f.frame.depth[i], 0.0f);
+    EXPECT_TRUE(std::isnan(f.curvature[i].x()));
+    EXPECT_FALSE(is_valid(f.normals[i]));
+  }
+  const SyntheticFrame k =
+      render(room_with(Sphere{{0, 0, 1.0}, 0.4}), kCamera, kView, parse_noise("kinect"), 3);
+  int dropouts = 0;
+  for (std::size_t i = 0; i < k.frame.depth.size(); ++i) {
+    if (k.frame.depth[i] > 0.0f) continue;
+    ++dropouts;
+    EXPECT_TRUE(std::isnan(k.curvature[i].x())) << i;
+    EXPECT_FALSE(is_valid(k.normals[i])) << i;
+  }
+  EXPECT_GT(dropouts, 10);
+}
+
 TEST(SyntheticRender, PlaneDepthIsTheAnalyticDistanceAlongTheOpticalAxis) {
   // A tilted plane; in camera coordinates n_c·X = d_c, so z = d_c / (n_c·((u−cx)/fx, (v−cy)/fy,
   // 1)).
