@@ -109,14 +109,16 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
       const Matrix6d Ad = se3_adjoint(previous_pose_);
       r.pose_covariance = previous_covariance_ + Ad * last_good_icp_covariance_ * Ad.transpose();
     }
-    // Keyframe policy: far enough from the keyframe, or too little overlap with it. A failed
-    // alignment against the keyframe starts a new one, or tracking could never recover; but
-    // never from a frame without the points to align against.
+    // Keyframe policy: far enough from the keyframe, or too little overlap with it, or a failed
+    // alignment; but never a frame without the points to align against. Against the keyframe,
+    // tracking could otherwise never recover. Frame to frame, the extrapolated motion would
+    // otherwise stay in every later frame's pose until the next keyframe, unrefined, while
+    // their own alignments say `ok`; as a keyframe, J-ftf refines it against the last one.
     const Eigen::Isometry3d T_kf_c = keyframe_.T_wc.pose.inverse() * r.T_wc.pose;
     r.overlap = overlap_with(*pyramid, *keyframe_.pyramid, T_kf_c, params_.icp, pool_.get());
     r.is_keyframe = (T_kf_c.translation().norm() > tp.keyframe_translation ||
                      rotation_angle(T_kf_c.linear()) > tp.keyframe_rotation * kDegToRad ||
-                     r.overlap < tp.keyframe_overlap || (to_keyframe && r.kept_last_motion)) &&
+                     r.overlap < tp.keyframe_overlap || r.kept_last_motion) &&
                     can_be_reference(*pyramid, params_.icp, pool_.get());
   }
   if (r.is_keyframe) {

@@ -121,6 +121,12 @@ TEST(KeyframeTracker, AFailedFrameKeepsTheLastGoodMotion) {
   // The next frame cannot align to the blank one either, and says so.
   EXPECT_TRUE(results[4].kept_last_motion);
   EXPECT_LT(test::translation_error(results[4].T_wc.pose, seq.ground_truth(4).value()), 2e-3);
+  // Frame to frame (the default) as well, a failed alignment starts a keyframe, so that the
+  // back end refines the extrapolated motion; but not the blank frame, which has no points.
+  ASSERT_EQ(FrontendParams{}.tracker.mode, TrackingMode::frame_to_frame);
+  EXPECT_FALSE(results[3].is_keyframe);
+  EXPECT_TRUE(results[4].is_keyframe);
+  EXPECT_FALSE(results[2].is_keyframe);  // 20 mm along the rail: not by distance
 }
 
 // The pose covariance is zero for the gauge and grows along the chain: each frame's is its
