@@ -86,6 +86,42 @@ std::array<double, 2> largest_motion(const std::vector<Eigen::Isometry3d>& a,
   return m;
 }
 
+// The Gauss-Newton matrix Σ w gᵀg of the free poses (6 rows each), in the coordinates of the
+// left update T ← exp(ξ^) T of the covariance (refiner.hpp), at the final poses: for a pair
+// (i, j), δe = gᵀξ_i − gᵀξ_j with g = [n_w; a × n_w], a = T_i X and n_w = R_j n (the terms of
+// point_to_plane_cost.hpp taken about the world origin). w is the robust loss's weight ρ′(e²).
+// The gauge and the frames held constant (not `free`) have no rows.
+Eigen::MatrixXd pose_information(const std::vector<std::array<int, 2>>& pairs,
+                                 const std::vector<std::vector<BundleCorrespondence>>& found,
+                                 const std::vector<Eigen::Isometry3d>& poses,
+                                 const std::vector<char>& free, const ceres::LossFunction& loss) {
+  std::vector<int> row(poses.size(), -1);  // a free pose's first row in H
+  int n = 0;
+  for (std::size_t k = 1; k < poses.size(); ++k)
+    if (free[k]) {
+      row[k] = n;
+      n += 6;
+    }
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+  for (std::size_t p = 0; p < pairs.size(); ++p) {
+    const auto [i, j] = pairs[p];
+    for (const BundleCorrespondence& c : found[p]) {
+      const Eigen::Vector3d a = poses[i] * c.X, n_w = poses[j].linear() * c.n;
+      const double e = PointToPlaneResidual<double>::error(a, poses[j] * c.q, n_w);
+      double rho[3];
+      loss.Evaluate(e * e, rho);
+      const Vector6d g = PointToPlaneResidual<double>::jacobian(a, n_w);
+      const Matrix6d wgg = rho[1] * g * g.transpose();
+      for (const auto& [k, l, sign] : {std::array<int, 3>{i, i, 1}, {j, j, 1}, {i, j, -1}}) {
+        if (row[k] < 0 || row[l] < 0) continue;
+        H.block<6, 6>(row[k], row[l]) += sign * wgg;
+        if (k != l) H.block<6, 6>(row[l], row[k]) += sign * wgg;
+      }
+    }
+  }
+  return H;
+}
+
 bool all_finite(const std::vector<PoseBlock>& blocks) {
   for (const PoseBlock& b : blocks)
     for (double x : b)
@@ -167,21 +203,32 @@ RefinementResult IcpBundle::refine(const std::vector<VertexMap>& vertices,
 
   std::vector<Eigen::Isometry3d> poses = initial_poses;
   std::vector<int> terms(static_cast<std::size_t>(M), 0);  // per frame, in the last solve
+  std::vector<std::array<int, 2>> solved_pairs;            // of the last solve ...
+  std::vector<std::vector<BundleCorrespondence>> found;    // ... with their correspondences
   report.verdict = RefinementVerdict::kMaxIterations;
   for (int outer = 0; outer < params_.outer_iterations; ++outer) {
     // Correspondences re-found at the current poses (method.md §9).
-    std::vector<std::array<int, 2>> solved_pairs;
-    std::vector<std::vector<BundleCorrespondence>> found;
-    std::size_t total = 0;
+    solved_pairs.clear();
+    found.clear();
     for (const auto& [i, j] : pairs) {
       if (!connected[i] || !connected[j]) continue;
       PairAssociation a =
           associate_pair(frames[i], frames[j], poses[j].inverse() * poses[i], camera, params_);
       if (static_cast<int>(a.correspondences.size()) < params_.min_pair_terms) continue;
-      total += a.correspondences.size();
       solved_pairs.push_back({i, j});
       found.push_back(std::move(a.correspondences));
     }
+    // Only pairs still tied to the gauge: frames whose every pair to it fell below
+    // min_pair_terms would be solved against each other alone, held by nothing but damping.
+    const std::vector<char> reached = connected_to_reference(M, solved_pairs);
+    for (std::size_t p = solved_pairs.size(); p-- > 0;)
+      if (!reached[solved_pairs[p][0]]) {
+        solved_pairs.erase(solved_pairs.begin() + static_cast<std::ptrdiff_t>(p));
+        found.erase(found.begin() + static_cast<std::ptrdiff_t>(p));
+      }
+    std::size_t total = 0;
+    for (const auto& f : found)
+      total += f.size();
     std::deque<PointToPlaneCost> costs;  // the problem keeps pointers into it
     ceres::Problem problem(problem_options);
     for (int k = 0; k < M; ++k)
@@ -234,6 +281,17 @@ RefinementResult IcpBundle::refine(const std::vector<VertexMap>& vertices,
     }
   }
   if (!report.isolated.empty()) report.verdict = RefinementVerdict::kNoOverlap;
+  // Whether the solved poses are observed at all (a window on one plane is not): the unit-free
+  // degeneracy of the last solve's system, as J-full reports it.
+  std::vector<char> free(static_cast<std::size_t>(M), 0);
+  for (int k = 1; k < M; ++k)
+    free[k] = connected[k] && terms[k] > 0;
+  if (std::find(free.begin(), free.end(), 1) != free.end()) {
+    report.degeneracy =
+        pose_system_degeneracy(pose_information(solved_pairs, found, poses, free, *loss));
+    if (usable(report.verdict) && report.degeneracy < params_.degeneracy_threshold)
+      report.verdict = RefinementVerdict::kDegenerate;
+  }
   const long unknowns = 6L * (M - 1 - static_cast<long>(report.isolated.size()));
   if (!report.cost.empty() && report.terms > unknowns)
     report.residual_variance = report.cost.back() / static_cast<double>(report.terms - unknowns);

@@ -25,6 +25,8 @@ void IcpBundleParams::validate() const {
     throw InputError("solver_iterations: must be in [1, 1000]");
   if (!(translation_tolerance > 0.0)) throw InputError("translation_tolerance: must be > 0 (m)");
   if (!(rotation_tolerance > 0.0)) throw InputError("rotation_tolerance: must be > 0 (rad)");
+  if (!(degeneracy_threshold >= 0.0 && degeneracy_threshold < 1.0))
+    throw InputError("degeneracy_threshold: must be in [0, 1)");
   if (threads < 0) throw InputError("threads: must be >= 0 (0: one per core)");
 }
 

@@ -33,7 +33,10 @@ struct IcpBundleParams {
   int solver_iterations = 10;  // Ceres iterations per solve (max_num_iterations)
   double translation_tolerance = 1e-5;  // m: converged when a whole solve moves every pose less
   double rotation_tolerance = 1e-5;     // rad: ... and turns it less than this
-  int threads = 0;                      // Ceres threads; 0: one per core
+  /// λmin / λmax of the unit-free pose system at the end (RefinementReport::degeneracy) below
+  /// which the verdict is kDegenerate: the window does not observe every pose (one plane).
+  double degeneracy_threshold = 1e-4;
+  int threads = 0;  // Ceres threads; 0: one per core
 
   void validate() const;  // throws InputError "field: problem"
 };

@@ -6,7 +6,6 @@
 #include <string>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Eigenvalues>
 
 #include "jpcr/quadric/se3.hpp"
 
@@ -57,16 +56,7 @@ void finish_report(const ReducedSystem& lin, bool estimate_quadrics, RefinementR
   r.sample_reuse =
       distinct > 0 ? std::max(1.0, static_cast<double>(lin.terms) / static_cast<double>(distinct))
                    : 1.0;
-  Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
-  for (int j = 0; j < n / 6; ++j) {
-    const double tv = lin.S.block<3, 3>(6 * j, 6 * j).trace();
-    const double tw = lin.S.block<3, 3>(6 * j + 3, 6 * j + 3).trace();
-    if (tv > 0.0 && tw > 0.0) d.segment<3>(6 * j + 3).setConstant(std::sqrt(tv / tw));
-  }
-  const Eigen::MatrixXd scaled = d.asDiagonal() * lin.S * d.asDiagonal();
-  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled, Eigen::EigenvaluesOnly);
-  const double top = eig.eigenvalues().maxCoeff();
-  r.degeneracy = top > 0.0 ? std::max(0.0, eig.eigenvalues().minCoeff()) / top : 0.0;
+  r.degeneracy = pose_system_degeneracy(lin.S);
   const Eigen::LDLT<Eigen::MatrixXd> ldlt(lin.S);
   if (ldlt.info() != Eigen::Success || !(r.degeneracy > 0.0)) return;
   const Eigen::MatrixXd cov =

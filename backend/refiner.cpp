@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include <Eigen/Eigenvalues>
+
 #include "jpcr/backend/fixed_quadric_alignment.hpp"
 #ifdef JPCR_HAVE_CERES
 #include "jpcr/backend/icp_bundle.hpp"
@@ -26,6 +28,21 @@ PoseSpread pose_spread(const Matrix6d& covariance, const Eigen::Isometry3d& pose
   const double tt = (J * covariance * J.transpose()).trace();
   const double rr = covariance.bottomRightCorner<3, 3>().trace();
   return {std::sqrt(std::max(0.0, tt)), std::sqrt(std::max(0.0, rr))};
+}
+
+double pose_system_degeneracy(const Eigen::MatrixXd& S) {
+  const Eigen::Index n = S.rows();
+  if (n == 0) return 0.0;
+  Eigen::VectorXd d = Eigen::VectorXd::Ones(n);
+  for (Eigen::Index j = 0; j < n / 6; ++j) {
+    const double tv = S.block<3, 3>(6 * j, 6 * j).trace();
+    const double tw = S.block<3, 3>(6 * j + 3, 6 * j + 3).trace();
+    if (tv > 0.0 && tw > 0.0) d.segment<3>(6 * j + 3).setConstant(std::sqrt(tv / tw));
+  }
+  const Eigen::MatrixXd scaled = d.asDiagonal() * S * d.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(scaled, Eigen::EigenvaluesOnly);
+  const double top = eig.eigenvalues().maxCoeff();
+  return top > 0.0 ? std::max(0.0, eig.eigenvalues().minCoeff()) / top : 0.0;
 }
 
 void report_pose_spread(RefinementResult& result) {

@@ -68,8 +68,9 @@ struct RefinementReport {
   double damping = 0.0;  // λ at the end
   /// λmin / λmax of the reduced pose system S made unit-free (each pose's ω block scaled by
   /// √(tr S_vv / tr S_ωω), as the front end's IcpResult::degeneracy): 1 is perfectly
-  /// conditioned, 0 unobservable; below JointParams::degeneracy_threshold the verdict is
-  /// kDegenerate.
+  /// conditioned, 0 unobservable; below JointParams::degeneracy_threshold (icp-bundle:
+  /// IcpBundleParams::degeneracy_threshold, its Gauss-Newton system of the poses it solved) the
+  /// verdict is kDegenerate.
   double degeneracy = 0.0;
   /// Per pose T_2 … T_M: the predicted RMS length of its translation error (m) and rotation
   /// error (rad) against the reference frame, from RefinementResult::covariance (pose_spread);
@@ -106,6 +107,12 @@ struct PoseSpread {
   double rotation_rad = 0.0;
 };
 PoseSpread pose_spread(const Matrix6d& covariance, const Eigen::Isometry3d& pose);
+
+/// The degeneracy of a pose system S (6 rows per pose, (v, ω) each): λmin / λmax after each
+/// pose's ω rows and columns are scaled by √(tr S_vv / tr S_ωω), the RMS lever arm, so that
+/// metres and radians weigh alike (as the front end's IcpResult::degeneracy). 1 is perfectly
+/// conditioned, 0 unobservable.
+double pose_system_degeneracy(const Eigen::MatrixXd& S);
 
 /// Fills the report's translation_sd / rotation_sd from result.covariance and result.poses, and
 /// step_translation_sd / step_rotation_sd from result.joint_covariance: the step

@@ -201,6 +201,7 @@ void read_icp_bundle(YamlSection yaml, IcpBundleParams& p) {
   yaml.read("solver_iterations", p.solver_iterations);
   yaml.read("translation_tolerance", p.translation_tolerance);
   yaml.read("rotation_tolerance", p.rotation_tolerance);
+  yaml.read("degeneracy_threshold", p.degeneracy_threshold);
   yaml.read("threads", p.threads);
   yaml.finish();
   validate_in(yaml, p);

@@ -27,8 +27,9 @@ struct JointTestWindow {
 /// `count` frames of room_spheres at `width` x 3/4 width. Frame j is the scene's view moved by
 /// j times a 3 cm / 1° camera motion; range noise "range:K" optional, drawn from `seed`.
 inline JointTestWindow render_window(int count, int width, const std::string& noise = "none",
-                                     std::uint64_t seed = 7) {
-  const SyntheticScene scene = load_scene("room_spheres");
+                                     std::uint64_t seed = 7,
+                                     const std::string& scene_name = "room_spheres") {
+  const SyntheticScene scene = load_scene(scene_name);
   JointTestWindow w;
   w.camera = synthetic_camera(width, width * 3 / 4);
   const Eigen::Isometry3d first = look_from(scene.view.eye, scene.view.target);
