@@ -17,6 +17,7 @@ class FixedQuadricAlignment final : public Refiner {
                           const QuadricMap& initial_quadrics) const override;
   std::string name() const override { return "q-full"; }
   const JointParams& params() const override { return params_; }
+  bool refines_quadrics() const override { return false; }
 
  private:
   JointParams params_;

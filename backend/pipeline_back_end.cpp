@@ -287,9 +287,9 @@ void PipelineBackEnd::refine_window() {
       k.used_front_end = true;  // with J-ftf, its pose (or its failure) stands
     }
   }
-  if (usable(r) && r.quadrics.width() > 0) {
+  if (usable(r) && r.quadrics.width() > 0) {  // Q-full's are Quad IT's, and say so
     window_->quadrics[0] = r.quadrics;
-    window_->sources[0] = window_refiner_->name();
+    window_->sources[0] = window_refiner_->refines_quadrics() ? window_refiner_->name() : "quad-it";
   }
   last.refine_ms += ms_since(t0);
   final_keyframes_ = keyframe_count();  // the window's last keyframe is the newest
@@ -349,16 +349,20 @@ StampedPose PipelineBackEnd::refined_pose(std::size_t index) const {
   const PipelineFrame& f = frame(index);
   const std::size_t ki = static_cast<std::size_t>(f.keyframe);
   const PipelineKeyframe& k = keyframe(ki);
+  StampedPose p = f.front_end;
+  if (f.index == k.frame) {  // the keyframe itself, to the bit as keyframes.txt has it
+    p.pose = k.refined.pose;
+    return p;
+  }
   // Re-anchoring (header): C_k, or C_k exp(s log(C_k⁻¹ C_{k+1})) between keyframes.
   Eigen::Isometry3d correction = k.refined.pose * k.front_end.pose.inverse();
-  if (interpolates() && f.index != k.frame && ki + 1 < keyframe_count()) {
+  if (interpolates() && ki + 1 < keyframe_count()) {
     const PipelineKeyframe& next = keyframe(ki + 1);
     const double s = static_cast<double>(f.index - k.frame) / (next.frame - k.frame);
     const Eigen::Isometry3d step =
         correction.inverse() * (next.refined.pose * next.front_end.pose.inverse());
     correction = correction * se3_exp(s * se3_log(step));
   }
-  StampedPose p = f.front_end;
   p.pose = correction * f.front_end.pose;
   return p;
 }

@@ -102,9 +102,9 @@ struct PipelineKeyframe {
   /// from the previous keyframe (after a failed J-ftf, a J-full window can still move it).
   bool used_front_end = false;
   double refine_ms = 0.0;
-  /// Whose quadrics gave the keyframe's curvature map: the refiner's name ("j-ftf", "j-full",
-  /// "q-full"), or "quad-it" where no refinement gave the keyframe quadrics (J-full refines
-  /// only the first keyframe of each window; ICP-bundle none). Empty until the map is final.
+  /// Whose quadrics gave the keyframe's curvature map: the refiner's name ("j-ftf", "j-full"),
+  /// or "quad-it" where no refinement gave the keyframe quadrics (J-full refines only the first
+  /// keyframe of each window; Q-full and ICP-bundle none). Empty until the map is final.
   std::string curvature;
 };
 

@@ -142,6 +142,8 @@ class Refiner {
 
   virtual std::string name() const = 0;
   virtual const JointParams& params() const = 0;
+  /// Whether RefinementResult::quadrics are refined; Q-full returns the initial ones as given.
+  virtual bool refines_quadrics() const { return true; }
 };
 
 /// The frames' vertex maps; throws std::invalid_argument (naming `method`) when there are none

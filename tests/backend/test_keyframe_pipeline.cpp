@@ -166,6 +166,18 @@ TEST(KeyframePipeline, JointFullWindowsChainAtTheirSharedFrames) {
   const std::vector<std::string> sources = {"j-full", "quad-it", "j-full", "quad-it", "quad-it"};
   for (std::size_t k = 0; k < 5; ++k)
     EXPECT_EQ(full.keyframes[k].curvature, sources[k]) << "keyframe " << k;
+  // A keyframe's pose in the trajectory is its refined pose to the bit (keyframes.txt and
+  // trajectory.txt agree).
+  for (const PipelineKeyframe& k : full.keyframes)
+    EXPECT_TRUE(full.trajectory[static_cast<std::size_t>(k.frame)].pose.matrix() ==
+                k.refined.pose.matrix())
+        << "keyframe of frame " << k.frame;
+  // Q-full holds the quadrics fixed: every map is Quad IT's, and says so.
+  const PipelineRun fixed = run_pipeline(seq, PipelineMethod::kFixedQuadrics, 3);
+  ASSERT_TRUE(fixed.keyframes[2].window.has_value());
+  EXPECT_TRUE(usable(fixed.keyframes[2].window->verdict));
+  for (std::size_t k = 0; k < 5; ++k)
+    EXPECT_EQ(fixed.keyframes[k].curvature, "quad-it") << "keyframe " << k;
 }
 
 TEST(KeyframePipeline, RefusesBadInput) {

@@ -167,7 +167,13 @@ int run_main(int argc, char** argv) {
             << (f.kept_last_motion ? " (kept last motion)" : "");
       progress(i - range.first + 1, range.last - range.first, extra.str());
     }
+    // finish() refines the last, partial window: its failure is said as the loop's are.
+    const bool window_before = runner.keyframes().back().window.has_value();
     runner.finish();
+    if (const PipelineKeyframe& k = runner.keyframes().back();
+        !window_before && k.window && k.window->verdict == RefinementVerdict::kError)
+      progress.note("frame " + std::to_string(k.frame) + ": " + k.window->method + " failed (" +
+                    k.window->error + ") on the last window; its poses are not applied");
     cli::throw_if_stopped("the end of the run" + unchanged);
 #ifdef JPCR_HAVE_DDS
     if (dds) {

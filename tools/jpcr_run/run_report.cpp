@@ -125,10 +125,9 @@ void write_verdicts(std::ostream& out, const KeyframePipeline& p) {
   out << "# jpcr_run verdicts, one line per frame of trajectory.txt:\n"
          "# timestamp front_end pair window trusted\n"
          "# front_end: ICP-ftf, ok | degenerate | diverged | too_few_points\n"
-         "# pair: J-ftf of the frame's keyframe, window: J-full/Q-full that refined it last,\n"
-         "#   converged | max_iterations | diverged | too_few_quadrics | no_overlap | degenerate "
-         "|\n"
-         "#   error (the refiner threw; report.json says what) | - (did not run)\n"
+         "# pair: J-ftf of the frame's keyframe, window: J-full/Q-full/ICP-bundle that refined\n"
+         "#   it last, converged | max_iterations | diverged | too_few_quadrics | no_overlap |\n"
+         "#   degenerate | error (the refiner threw; report.json says what) | - (did not run)\n"
          "# trusted: yes when front_end is ok and every refinement converged or hit "
          "max_iterations\n";
   const auto refinement = [](const std::optional<RefinementVerdict>& v) {
