@@ -91,6 +91,9 @@ int run(int argc, char** argv) {
     command << "jpcr_synth --scene " << options.scene << " --trajectory "
             << to_string(options.trajectory) << " --frames " << options.frames << " --noise "
             << options.noise << " --size " << width << 'x' << height << " --seed " << seed;
+    // Both change the data (the rate, the rail's step, the walk, the Kinect model; the camera).
+    if (args.has("params")) command << " --params " << args.get("params");
+    if (args.has("config")) command << " --config " << args.get("config");
     SyntheticWriterOptions writer;
     writer.force = args.get_flag("force");
     writer.comment = command.str();
