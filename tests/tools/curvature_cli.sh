@@ -41,7 +41,8 @@ if /usr/bin/python3 -c 'import numpy' 2>/dev/null; then
 import glob, json, sys, numpy as np
 t = sys.argv[1]
 r = json.load(open(t + "/it.json"))
-assert r["frames"] == 3 and 0.9 < r["coverage"] <= 1.0, r
+assert r["frames"] == 3 and r["estimated_frames"] == 3 and r["gt_frames"] == 3, r
+assert 0.9 < r["coverage"] <= 1.0, r
 assert 0 < r["rms"] < 50, r
 i = json.load(open(t + "/it_interior.json"))
 assert i["support_radius_px"] == 5 and 0 < i["gt_valid_pixels"] < r["gt_valid_pixels"], (i, r)

@@ -53,10 +53,15 @@ int support_radius(const std::string& text, int width) {
   return r;
 }
 
-void write_json(std::ostream& out, const CurvatureErrors& e) {
+// `frames` compared, of `estimated` maps and `with_truth` ground-truth maps: coverage counts the
+// compared frames only, so a method that returns a map for few frames shows it here.
+void write_json(std::ostream& out, const CurvatureErrors& e, std::size_t estimated,
+                std::size_t with_truth) {
   JsonWriter json(out);
   json.begin_object()
       .field("frames", e.frames)
+      .field("estimated_frames", estimated)
+      .field("gt_frames", with_truth)
       .field("rms_k1", e.rms_k1)
       .field("rms_k2", e.rms_k2)
       .field("rms", e.rms)
@@ -76,7 +81,8 @@ int run_curvature(int argc, char** argv) {
       "jpcr_eval curvature",
       "Principal-curvature error against ground truth: RMS of k1 and k2 (1/m) over\n"
       "pixels valid in both, median absolute error, and coverage (the fraction of\n"
-      "ground-truth pixels the estimate covers). Frames are matched by stamp\n"
+      "ground-truth pixels of the compared frames the estimate covers). Frames are\n"
+      "matched by stamp\n"
       "(GT/curvature/<stamp>.npy and EST/curvature/<stamp>.npy). With --support R\n"
       "only interior pixels count: those whose (2R+1)x(2R+1) window has ground truth\n"
       "everywhere, so a patch fit of radius R sees one smooth surface (no crease,\n"
@@ -129,17 +135,19 @@ int run_curvature(int argc, char** argv) {
                        " (" + std::to_string(e.gt_valid) + " valid ground-truth pixels)");
     if (args.has("out")) {
       ensure_parent_directory(args.get("out"));
-      write_file_atomically(args.get("out"), [&](std::ostream& out) { write_json(out, e); });
+      write_file_atomically(args.get("out"),
+                            [&](std::ostream& out) { write_json(out, e, est.size(), gt.size()); });
     }
     if (args.get_flag("json")) {
-      write_json(std::cout, e);
+      write_json(std::cout, e, est.size(), gt.size());
     } else {
       std::printf("frames: %zu compared (%zu estimated, %zu with ground truth)\n", e.frames,
                   est.size(), gt.size());
       std::printf("rms k1 %.4f 1/m  rms k2 %.4f 1/m  rms %.4f 1/m  median |err| %.4f 1/m\n",
                   e.rms_k1, e.rms_k2, e.rms, e.median_abs);
-      std::printf("coverage %.2f %% (%zu of %zu ground-truth pixels%s)\n", 100.0 * e.coverage,
-                  e.compared, e.gt_valid, e.support_radius > 0 ? ", interior only" : "");
+      std::printf("coverage %.2f %% (%zu of %zu ground-truth pixels of the compared frames%s)\n",
+                  100.0 * e.coverage, e.compared, e.gt_valid,
+                  e.support_radius > 0 ? ", interior only" : "");
     }
     return 0;
   });
