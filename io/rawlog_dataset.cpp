@@ -10,7 +10,10 @@
 #include <cstdio>
 #include <filesystem>
 #include <limits>
+#include <mutex>
+#include <set>
 
+#include <mrpt/img/CImage.h>
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
@@ -121,6 +124,72 @@ void check_mrpt_survives(const std::string& path) {
                    ": a corrupt size field)");
 }
 
+// An MRPT exception's message without its call stack: the lines before "Call stack", minus the
+// banner and empty fields, joined.
+std::string mrpt_message(const std::exception& e) {
+  std::string text = e.what();
+  text = text.substr(0, text.find("Call stack"));
+  std::string out;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    std::string line = text.substr(start, end - start);
+    start = end + 1;
+    for (const char* prefix : {"Message: ", "Location: "})
+      if (line.rfind(prefix, 0) == 0) line.erase(0, std::char_traits<char>::length(prefix));
+    if (line.empty() || line.find("MRPT exception") != std::string::npos) continue;
+    out += (out.empty() ? "" : "; ") + line;
+  }
+  return out.empty() ? text : out;
+}
+
+// Where MRPT's tools keep a rawlog's externally stored images: the first of <name>_Images,
+// <name>_images, <name>_IMAGES and Images beside it that exists, else <name>_Images.
+std::string images_directory_of(const std::string& rawlog) {
+  namespace fs = std::filesystem;
+  const fs::path file(rawlog);
+  const std::string stem = file.stem().string();
+  std::error_code ec;
+  for (const std::string& name :
+       {stem + "_Images", stem + "_images", stem + "_IMAGES", std::string("Images")})
+    if (fs::is_directory(file.parent_path() / name, ec))
+      return (file.parent_path() / name).string();
+  return (file.parent_path() / (stem + "_Images")).string();
+}
+
+// The scans must be one sensor's, in time order, with one camera: a rawlog of two cameras, or
+// one joined out of order, would otherwise be tracked as one camera jumping between views.
+void check_scans(const std::string& path, const std::vector<CObservation3DRangeScan::Ptr>& scans,
+                 bool check_cameras) {
+  std::set<std::string> labels;
+  for (const auto& scan : scans)
+    labels.insert(scan->sensorLabel);
+  if (labels.size() > 1) {
+    std::string names;
+    for (const std::string& l : labels)
+      names += (names.empty() ? "'" : ", '") + l + "'";
+    throw InputError(path + ": the rawlog holds range scans of " + std::to_string(labels.size()) +
+                     " sensors (" + names +
+                     "); jpcr tracks one camera (keep one with MRPT's rawlog-edit --keep-label)");
+  }
+  const CameraIntrinsics first = camera_of(*scans.front());
+  for (std::size_t i = 1; i < scans.size(); ++i) {
+    const double t0 = mrpt::Clock::toDouble(scans[i - 1]->timestamp);
+    const double t1 = mrpt::Clock::toDouble(scans[i]->timestamp);
+    if (!(t1 > t0))
+      throw InputError(path + ": scan " + std::to_string(i) + " (t = " + std::to_string(t1) +
+                       ") is not after scan " + std::to_string(i - 1) +
+                       " (t = " + std::to_string(t0) + "): the scans must be in time order");
+    const CameraIntrinsics c = camera_of(*scans[i]);
+    if (check_cameras && !(c.fx == first.fx && c.fy == first.fy && c.cx == first.cx &&
+                           c.cy == first.cy && c.width == first.width && c.height == first.height))
+      throw InputError(path + ": scan " + std::to_string(i) + "'s camera differs from scan 0's (" +
+                       describe(c) + " against " + describe(first) +
+                       "); give one with --config to use it for every scan");
+  }
+}
+
 }  // namespace
 
 RawlogDataset::RawlogDataset(const std::string& path, const std::optional<CameraIntrinsics>& camera)
@@ -134,6 +203,8 @@ RawlogDataset::RawlogDataset(const std::string& path, const std::optional<Camera
   if (scans_->observations.empty()) {
     throw InputError(path + ": the rawlog holds no CObservation3DRangeScan with a range image");
   }
+  check_scans(path, scans_->observations, !camera);
+  images_directory_ = images_directory_of(path);
   camera_ = camera ? *camera : camera_of(*scans_->observations.front());
   if (!camera) camera_.distortion = {};  // MRPT range images are used as stored
   try {
@@ -155,10 +226,31 @@ double RawlogDataset::timestamp(std::size_t index) const {
 
 Frame RawlogDataset::load(std::size_t index) const {
   const CObservation3DRangeScan& scan = *scans_->observations.at(index);
-  try {
-    scan.load();  // externally stored range images
-  } catch (const std::exception& e) {
-    throw InputError(path_ + ": scan " + std::to_string(index) + ": " + e.what());
+  {
+    // Externally stored range images are found relative to MRPT's process-wide images path:
+    // set to this rawlog's for the load, and put back (one load at a time through jpcr).
+    static std::mutex images_path;
+    const std::lock_guard<std::mutex> lock(images_path);
+    const std::string before = mrpt::img::CImage::getImagesPathBase();
+    mrpt::img::CImage::setImagesPathBase(images_directory_);
+    std::string problem;
+    if (scan.rangeImage_isExternallyStored()) {
+      const std::string file = scan.rangeImage_getExternalStorageFileAbsolutePath("");
+      std::error_code ec;
+      if (!std::filesystem::is_regular_file(file, ec))
+        problem = "its range image is stored in " + file + ", which is not a file (MRPT looks in " +
+                  "the rawlog's images directory, " + images_directory_ + ")";
+    }
+    if (problem.empty()) {
+      try {
+        scan.load();
+      } catch (const std::exception& e) {
+        problem = mrpt_message(e);
+      }
+    }
+    mrpt::img::CImage::setImagesPathBase(before);
+    if (!problem.empty())
+      throw InputError(path_ + ": scan " + std::to_string(index) + ": " + problem);
   }
   const auto& range = scan.rangeImage;
   if (range.cols() != camera_.width || range.rows() != camera_.height) {

@@ -1,6 +1,8 @@
 // MRPT rawlogs as a depth source: every CObservation3DRangeScan with a range image, in either
-// rawlog format (observations, or sensory frames). The intrinsics come from the observations'
-// depth camera unless a camera file overrides them. Rawlogs carry no ground truth.
+// rawlog format (observations, or sensory frames), of one sensor, in time order. The intrinsics
+// come from the observations' depth camera unless a camera file overrides them. Range images
+// stored outside the rawlog are read from its images directory, as MRPT's tools find it
+// (<name>_Images beside the file). Rawlogs carry no ground truth.
 #pragma once
 
 #include <memory>
@@ -15,7 +17,8 @@ namespace jpcr {
 class RawlogDataset final : public FrameSource {
  public:
   /// Loads the rawlog; throws InputError naming the file when it cannot be read, holds no 3-D
-  /// range scan with a range image, or its scans disagree in size. `camera` overrides the
+  /// range scan with a range image, holds scans of more than one sensor label, scans out of
+  /// time order, or (without `camera`) scans whose intrinsics differ. `camera` overrides the
   /// intrinsics stored in the file (its size must match the range images).
   explicit RawlogDataset(const std::string& path,
                          const std::optional<CameraIntrinsics>& camera = std::nullopt);
@@ -31,6 +34,7 @@ class RawlogDataset final : public FrameSource {
  private:
   struct Scans;
   std::string path_;
+  std::string images_directory_;  // where externally stored range images are
   CameraIntrinsics camera_;
   std::unique_ptr<Scans> scans_;
 };

@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/obs/CObservation3DRangeScan.h>
+#include <mrpt/serialization/CArchive.h>
 
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/open_dataset.hpp"
@@ -35,6 +37,28 @@ std::string gunzip(const std::string& path) {
 void gzip(const std::string& path, const std::string& bytes) {
   mrpt::io::CFileGZOutputStream out(path);
   out.Write(bytes.data(), bytes.size());
+}
+
+// Rewrites the rawlog `in` (of observations, as write_rawlog makes) to `out`, passing each scan
+// and its index through `edit`: to relabel it, restamp it or store its range image outside.
+void edit_rawlog(const std::string& in, const std::string& out,
+                 const std::function<void(mrpt::obs::CObservation3DRangeScan&, int)>& edit) {
+  mrpt::io::CFileGZInputStream input(in);
+  auto reader = mrpt::serialization::archiveFrom(input);
+  mrpt::io::CFileGZOutputStream output(out);
+  auto writer = mrpt::serialization::archiveFrom(output);
+  for (int i = 0;; ++i) {
+    mrpt::serialization::CSerializable::Ptr object;
+    try {
+      reader >> object;
+    } catch (const std::exception&) {
+      break;
+    }
+    auto scan = std::dynamic_pointer_cast<mrpt::obs::CObservation3DRangeScan>(object);
+    ASSERT_TRUE(scan);
+    edit(*scan, i);
+    writer << *scan;
+  }
 }
 
 std::string error_of(const std::function<void()>& f) {
@@ -82,6 +106,81 @@ TEST(RawlogDataset, RoundTripOfRealFramesIsExact) {
     }
     EXPECT_EQ(differing, 0) << "frame " << i;
   }
+}
+
+CameraIntrinsics small_camera() {
+  CameraIntrinsics c;
+  c.width = 8;
+  c.height = 6;
+  c.fx = c.fy = 10.0;
+  c.cx = 3.5;
+  c.cy = 2.5;
+  return c;
+}
+
+// Three frames of 8x6, 1/30 s apart, as write_rawlog writes them.
+std::string small_rawlog(const test::TempDir& dir) {
+  std::vector<Frame> frames(3);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    frames[i].timestamp = 10.0 + i / 30.0;
+    frames[i].camera = small_camera();
+    frames[i].depth = DepthImage(8, 6, 1.0f + 0.1f * i);
+  }
+  const std::string path = dir.file("small.rawlog");
+  write_rawlog(path, frames);
+  return path;
+}
+
+// Range images stored outside the rawlog (MRPT's external storage) are read from its images
+// directory, <name>_Images beside it, whatever the working directory; one that is missing is
+// named, without MRPT's call stack.
+TEST(RawlogDataset, ExternallyStoredRangeImagesAreReadFromTheImagesDirectory) {
+  test::TempDir dir;
+  const std::string images = dir.file("ext_Images");
+  std::filesystem::create_directories(images);
+  edit_rawlog(small_rawlog(dir), dir.file("ext.rawlog"),
+              [&](mrpt::obs::CObservation3DRangeScan& scan, int i) {
+                scan.rangeImage_convertToExternalStorage("range_" + std::to_string(i) + ".bin",
+                                                         images + "/");
+              });
+  ASSERT_TRUE(std::filesystem::exists(images + "/range_2.bin"));
+  const RawlogDataset rawlog(dir.file("ext.rawlog"));
+  ASSERT_EQ(rawlog.size(), 3u);
+  const Frame frame = rawlog.load(2);
+  EXPECT_NEAR(frame.depth(3, 2), 1.2f, 1e-3f);
+  std::filesystem::remove(images + "/range_1.bin");
+  const std::string missing = error_of([&] { rawlog.load(1); });
+  EXPECT_NE(missing.find("ext.rawlog: scan 1: its range image is stored in"), std::string::npos)
+      << missing;
+  EXPECT_NE(missing.find("range_1.bin"), std::string::npos) << missing;
+  EXPECT_EQ(missing.find("Call stack"), std::string::npos) << missing;
+}
+
+// One camera, in time order: two sensors' scans, or scans out of order, are refused.
+TEST(RawlogDataset, ScansOfTwoSensorsOrOutOfOrderAreRefused) {
+  test::TempDir dir;
+  const std::string small = small_rawlog(dir);
+  edit_rawlog(small, dir.file("two.rawlog"), [](mrpt::obs::CObservation3DRangeScan& scan, int i) {
+    scan.sensorLabel = i % 2 ? "KINECT_B" : "KINECT_A";
+  });
+  const std::string two = error_of([&] { RawlogDataset r(dir.file("two.rawlog")); });
+  EXPECT_NE(two.find("two.rawlog: the rawlog holds range scans of 2 sensors ('KINECT_A', "
+                     "'KINECT_B')"),
+            std::string::npos)
+      << two;
+  edit_rawlog(small, dir.file("back.rawlog"), [](mrpt::obs::CObservation3DRangeScan& scan, int i) {
+    scan.timestamp = mrpt::Clock::fromDouble(10.0 - i / 30.0);
+  });
+  const std::string back = error_of([&] { RawlogDataset r(dir.file("back.rawlog")); });
+  EXPECT_NE(back.find("back.rawlog: scan 1 (t = "), std::string::npos) << back;
+  EXPECT_NE(back.find("must be in time order"), std::string::npos) << back;
+  edit_rawlog(small, dir.file("zoom.rawlog"), [](mrpt::obs::CObservation3DRangeScan& scan, int i) {
+    if (i == 2) scan.cameraParams.setIntrinsicParamsFromValues(12, 12, 3.5, 2.5);
+  });
+  const std::string zoom = error_of([&] { RawlogDataset r(dir.file("zoom.rawlog")); });
+  EXPECT_NE(zoom.find("zoom.rawlog: scan 2's camera differs from scan 0's"), std::string::npos)
+      << zoom;
+  EXPECT_EQ(RawlogDataset(dir.file("zoom.rawlog"), small_camera()).size(), 3u);  // one given
 }
 
 TEST(RawlogDataset, BadInputNamesTheFile) {
