@@ -53,7 +53,13 @@ valid = np.isfinite(k[..., 0])
 assert valid.mean() > 0.9 and np.all(k[valid][:, 0] >= k[valid][:, 1])
 s = json.load(open(t + "/it/summary.json"))
 assert s["method"] == "quad-it" and len(s["frames"]) == 3
+# The same maps with k1 and k2 swapped, as a peer with another convention might write them.
+import os, shutil
+os.makedirs(t + "/swapped/curvature")
+for f in glob.glob(t + "/it/curvature/*.npy"):
+    np.save(t + "/swapped/curvature/" + os.path.basename(f), np.load(f)[..., ::-1].copy())
 PY
+  expect 0 "warning: .* pixels of .*swapped have k1 < k2" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/swapped"
 else
   echo "SKIP: the numpy checks (no python3-numpy); the test reports skipped"
   numpy_missing=1

@@ -104,7 +104,8 @@ int run_curvature(int argc, char** argv) {
     const std::set<std::string> gt = curvature_stamps(args.get("gt"));
     const std::set<std::string> est = curvature_stamps(args.get("est"));
     std::optional<CurvatureErrorAccumulator> acc;
-    std::size_t infinite = 0;  // estimate pixels at ±Inf: counted as missing, and said so
+    std::size_t infinite = 0;   // estimate pixels at ±Inf: counted as missing, and said so
+    std::size_t unordered = 0;  // κ1 < κ2: another convention (swapped channels, flipped sign)
     for (const std::string& stamp : est) {
       if (!gt.count(stamp)) continue;
       const std::string name = "curvature/" + stamp + ".npy";
@@ -113,8 +114,10 @@ int run_curvature(int argc, char** argv) {
       const std::string est_file = (fs::path(args.get("est")) / name).string();
       try {
         const CurvatureImage estimate = read_curvature_npy(est_file);
-        for (const Eigen::Vector2f& k : estimate)
+        for (const Eigen::Vector2f& k : estimate) {
           infinite += k.array().isInf().any() ? 1 : 0;
+          unordered += k.x() < k.y() ? 1 : 0;  // false with a NaN
+        }
         acc->add(truth, estimate);
       } catch (const InputError& e) {  // name the map, not only the problem (once)
         const std::string what = e.what();
@@ -125,6 +128,10 @@ int run_curvature(int argc, char** argv) {
     if (infinite > 0)
       std::cerr << "jpcr_eval curvature: warning: " << infinite << " pixels of " << args.get("est")
                 << " are +-Inf; they count as missing (a map marks invalid pixels with NaN)\n";
+    if (unordered > 0)
+      std::cerr << "jpcr_eval curvature: warning: " << unordered << " pixels of " << args.get("est")
+                << " have k1 < k2: method.md section 1 orders k1 >= k2 (negative where the surface "
+                   "bulges toward the camera); swapped channels or another sign convention?\n";
     const CurvatureErrors e = acc ? acc->result() : CurvatureErrors{};
     if (e.frames == 0)
       throw InputError(args.get("est") + ": no curvature map shares a stamp with " +

@@ -23,7 +23,8 @@ struct TrajectoryReport {
   std::size_t gt_poses = 0, est_poses = 0;
   AteResult ate;
   RpeResult rpe_frame;
-  std::optional<RpeResult> rpe_second;  // absent when the sequence is shorter than 1 s
+  std::optional<RpeResult> rpe_second;  // absent when no pair 1 s apart could be formed ...
+  std::string rpe_second_missing;       // ... and why
   RelativeErrors relative;
   DriftCurve drift;
   std::optional<PairedComparison> baseline;  // --baseline: est against it, per frame pair
@@ -108,7 +109,7 @@ void write_text(std::ostream& out, const TrajectoryReport& r) {
                   r.rpe_second->translation.count);
     out << line;
   } else {
-    out << "RPE per second n/a (sequence shorter than 1 s)\n";
+    out << "RPE per second n/a (" << r.rpe_second_missing << ")\n";
   }
   std::snprintf(line, sizeof(line),
                 "relative (paper Tables I-III) translation %.3e m  rotation %.3e rad (%zu pairs)\n",
@@ -186,9 +187,11 @@ int run_trajectory(int argc, char** argv) {
     if (est.back().timestamp - est.front().timestamp > 1.0) {
       try {
         report.rpe_second = compute_rpe(gt, est, 1.0, DeltaUnit::kSeconds);
-      } catch (const InputError&) {
-        report.rpe_second.reset();
+      } catch (const InputError& e) {
+        report.rpe_second_missing = e.what();
       }
+    } else {
+      report.rpe_second_missing = "the estimate spans 1 s or less";
     }
     report.relative = compute_relative_errors(gt, est, max_difference);
     report.drift = compute_drift(gt, est, max_difference);
