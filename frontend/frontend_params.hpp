@@ -78,7 +78,9 @@ struct TrackerParams {
   /// A frame becomes a keyframe when it is this far from the current keyframe ...
   double keyframe_translation = 0.10;  // m
   double keyframe_rotation = 10.0;     // deg
-  /// ... or when fewer than this fraction of its valid points pair with the keyframe.
+  /// ... or when fewer than this fraction of its valid points pair with the keyframe, or when
+  /// its alignment failed (frame to frame: diverged or too few points, not degenerate), so that
+  /// the back end refines the extrapolated motion; never a frame without points to align to.
   double keyframe_overlap = 0.6;
   bool accept_degenerate = false;  // use a `degenerate` ICP result as if it were `ok`
 

@@ -114,11 +114,15 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
     // tracking could otherwise never recover. Frame to frame, the extrapolated motion would
     // otherwise stay in every later frame's pose until the next keyframe, unrefined, while
     // their own alignments say `ok`; as a keyframe, J-ftf refines it against the last one.
+    // Not for a degenerate alignment there: a featureless view would make every frame a
+    // keyframe, and J-ftf cannot observe what ICP could not.
+    const bool failed =
+        r.kept_last_motion && (to_keyframe || r.icp.verdict != IcpVerdict::degenerate);
     const Eigen::Isometry3d T_kf_c = keyframe_.T_wc.pose.inverse() * r.T_wc.pose;
     r.overlap = overlap_with(*pyramid, *keyframe_.pyramid, T_kf_c, params_.icp, pool_.get());
     r.is_keyframe = (T_kf_c.translation().norm() > tp.keyframe_translation ||
                      rotation_angle(T_kf_c.linear()) > tp.keyframe_rotation * kDegToRad ||
-                     r.overlap < tp.keyframe_overlap || r.kept_last_motion) &&
+                     r.overlap < tp.keyframe_overlap || failed) &&
                     can_be_reference(*pyramid, params_.icp, pool_.get());
   }
   if (r.is_keyframe) {

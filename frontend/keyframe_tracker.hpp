@@ -1,7 +1,8 @@
 // The front end's tracker: ICP-ftf against the previous frame (the paper's baseline) or against
-// the current keyframe, with a keyframe policy (translation, rotation, overlap) that selects the
-// frames the back end refines. A failed alignment never moves the camera silently: the tracker
-// extrapolates the last good motion and says so (TrackResult::kept_last_motion).
+// the current keyframe, with a keyframe policy (translation, rotation, overlap, a failed
+// alignment) that selects the frames the back end refines. A failed alignment never moves the
+// camera silently: the tracker extrapolates the last good motion and says so
+// (TrackResult::kept_last_motion).
 //
 //   KeyframeTracker tracker(params.frontend);
 //   for (...) {

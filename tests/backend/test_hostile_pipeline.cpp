@@ -23,7 +23,8 @@ TEST(HostileScenes, AnUnspoiledWalkIsTrustedThroughout) {
 // now J-ftf says degenerate and J-full degenerate or diverged).
 TEST(HostileScenes, FeaturelessCorridorIsNotOk) {
   // The corridor looks the same from every frame (overlap 1): tracking to the keyframe makes
-  // each failed frame a keyframe, so the back end runs.
+  // each failed frame a keyframe, so the back end runs (frame to frame, a degenerate alignment
+  // starts none).
   PipelineParams p = small_frame_params();
   p.frontend.tracker.mode = TrackingMode::frame_to_keyframe;
   const PipelineRun r = run(walk("corridor", 6), {}, p);

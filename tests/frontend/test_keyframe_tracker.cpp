@@ -129,6 +129,29 @@ TEST(KeyframeTracker, AFailedFrameKeepsTheLastGoodMotion) {
   EXPECT_FALSE(results[2].is_keyframe);  // 20 mm along the rail: not by distance
 }
 
+// Frame to frame, a degenerate alignment (a featureless corridor) keeps the last motion but
+// starts no keyframe, or every frame of such a view would be one; J-ftf could not observe the
+// motion either.
+TEST(KeyframeTracker, ADegenerateAlignmentStartsNoKeyframeFrameToFrame) {
+  SyntheticSequenceOptions options;
+  options.scene = "corridor";
+  options.frames = 5;
+  options.width = 160;
+  options.height = 120;
+  options.seed = 1;
+  const SyntheticSequence seq = make_synthetic_sequence(options);
+  KeyframeTracker tracker(FrontendParams{}, seq.ground_truth(0).value());
+  int degenerate = 0;
+  for (std::size_t i = 0; i < seq.size(); ++i) {
+    const TrackResult r = tracker.track(seq.load(i));
+    if (i == 0 || r.icp.verdict != IcpVerdict::degenerate) continue;
+    ++degenerate;
+    EXPECT_TRUE(r.kept_last_motion) << "frame " << i;
+    EXPECT_FALSE(r.is_keyframe) << "frame " << i;
+  }
+  EXPECT_GE(degenerate, 3);
+}
+
 // The pose covariance is zero for the gauge and grows along the chain: each frame's is its
 // reference's plus its alignment's carried into world axes; a frame that kept the last motion
 // adds the last good alignment's again.
