@@ -226,38 +226,41 @@ double RawlogDataset::timestamp(std::size_t index) const {
 
 Frame RawlogDataset::load(std::size_t index) const {
   const CObservation3DRangeScan& scan = *scans_->observations.at(index);
-  {
-    // Externally stored range images are found relative to MRPT's process-wide images path:
-    // set to this rawlog's for the load, and put back (one load at a time through jpcr).
-    static std::mutex images_path;
-    const std::lock_guard<std::mutex> lock(images_path);
-    const std::string before = mrpt::img::CImage::getImagesPathBase();
-    mrpt::img::CImage::setImagesPathBase(images_directory_);
-    std::string problem;
-    if (scan.rangeImage_isExternallyStored()) {
+  const std::string where = path_ + ": scan " + std::to_string(index) + ": ";
+  // MRPT's load() rewrites the scan's images in place and finds externally stored ones through
+  // its process-wide images path. So loads through jpcr take turns, with that path set to this
+  // rawlog's images directory and put back however the load ends, and an external image is
+  // unloaded again once copied: the scans hold no more than the rawlog itself.
+  static std::mutex mrpt_load;
+  const std::lock_guard<std::mutex> lock(mrpt_load);
+  struct ImagesPath {
+    explicit ImagesPath(const std::string& path) : before(mrpt::img::CImage::getImagesPathBase()) {
+      mrpt::img::CImage::setImagesPathBase(path);
+    }
+    ~ImagesPath() { mrpt::img::CImage::setImagesPathBase(before); }
+    const std::string before;
+  } images_path(images_directory_);
+  const bool external = scan.rangeImage_isExternallyStored();
+  try {
+    if (external) {
       const std::string file = scan.rangeImage_getExternalStorageFileAbsolutePath("");
       std::error_code ec;
       if (!std::filesystem::is_regular_file(file, ec))
-        problem = "its range image is stored in " + file + ", which is not a file (MRPT looks in " +
-                  "the rawlog's images directory, " + images_directory_ + ")";
+        throw InputError(where + "its range image is stored in " + file +
+                         ", which is not a file (MRPT looks in the rawlog's images directory, " +
+                         images_directory_ + ")");
     }
-    if (problem.empty()) {
-      try {
-        scan.load();
-      } catch (const std::exception& e) {
-        problem = mrpt_message(e);
-      }
-    }
-    mrpt::img::CImage::setImagesPathBase(before);
-    if (!problem.empty())
-      throw InputError(path_ + ": scan " + std::to_string(index) + ": " + problem);
+    scan.load();
+  } catch (const InputError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw InputError(where + mrpt_message(e));
   }
   const auto& range = scan.rangeImage;
   if (range.cols() != camera_.width || range.rows() != camera_.height) {
-    throw InputError(path_ + ": scan " + std::to_string(index) + " is " +
-                     std::to_string(range.cols()) + "x" + std::to_string(range.rows()) +
-                     " but the camera is " + std::to_string(camera_.width) + "x" +
-                     std::to_string(camera_.height));
+    throw InputError(where + "it is " + std::to_string(range.cols()) + "x" +
+                     std::to_string(range.rows()) + " but the camera is " +
+                     std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
   }
   Frame frame;
   frame.timestamp = timestamp(index);
@@ -275,6 +278,7 @@ Frame RawlogDataset::load(std::size_t index) const {
       frame.depth(u, v) = static_cast<float>(value);
     }
   }
+  if (external) scan.unload();
   return frame;
 }
 

@@ -26,6 +26,10 @@ class RawlogDataset final : public FrameSource {
 
   std::size_t size() const override;
   double timestamp(std::size_t index) const override;
+  /// Loads take turns (MRPT rewrites a scan's images as it loads them). For an externally
+  /// stored range image, MRPT's process-wide images path (CImage::setImagesPathBase) is this
+  /// rawlog's images directory during the load and is put back after it: a program that loads
+  /// MRPT images on another thread at the same time may see it changed meanwhile.
   Frame load(std::size_t index) const override;
   std::optional<Eigen::Isometry3d> ground_truth(std::size_t) const override { return {}; }
   const CameraIntrinsics& camera() const override { return camera_; }

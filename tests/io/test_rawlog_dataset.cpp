@@ -5,6 +5,7 @@
 #include <filesystem>
 
 #include <gtest/gtest.h>
+#include <mrpt/img/CImage.h>
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/obs/CObservation3DRangeScan.h>
@@ -146,14 +147,17 @@ TEST(RawlogDataset, ExternallyStoredRangeImagesAreReadFromTheImagesDirectory) {
   ASSERT_TRUE(std::filesystem::exists(images + "/range_2.bin"));
   const RawlogDataset rawlog(dir.file("ext.rawlog"));
   ASSERT_EQ(rawlog.size(), 3u);
+  mrpt::img::CImage::setImagesPathBase("/the/caller's/own");
   const Frame frame = rawlog.load(2);
   EXPECT_NEAR(frame.depth(3, 2), 1.2f, 1e-3f);
+  EXPECT_EQ(mrpt::img::CImage::getImagesPathBase(), "/the/caller's/own");  // put back
   std::filesystem::remove(images + "/range_1.bin");
   const std::string missing = error_of([&] { rawlog.load(1); });
   EXPECT_NE(missing.find("ext.rawlog: scan 1: its range image is stored in"), std::string::npos)
       << missing;
   EXPECT_NE(missing.find("range_1.bin"), std::string::npos) << missing;
   EXPECT_EQ(missing.find("Call stack"), std::string::npos) << missing;
+  EXPECT_EQ(mrpt::img::CImage::getImagesPathBase(), "/the/caller's/own");  // after an error too
 }
 
 // One camera, in time order: two sensors' scans, or scans out of order, are refused.
