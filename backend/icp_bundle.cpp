@@ -86,7 +86,8 @@ std::array<double, 2> largest_motion(const std::vector<Eigen::Isometry3d>& a,
   return m;
 }
 
-// The Gauss-Newton matrix Σ w gᵀg of the free poses (6 rows each), in the coordinates of the
+// For the degeneracy of method.md §9's window (§5's "Convergence and degeneracy", as J-full):
+// the Gauss-Newton matrix Σ w gᵀg of the free poses (6 rows each), in the coordinates of the
 // left update T ← exp(ξ^) T of the covariance (refiner.hpp), at the final poses: for a pair
 // (i, j), δe = gᵀξ_i − gᵀξ_j with g = [n_w; a × n_w], a = T_i X and n_w = R_j n (the terms of
 // point_to_plane_cost.hpp taken about the world origin). w is the robust loss's weight ρ′(e²).

@@ -8,9 +8,12 @@
 //   RefinementResult r = bundle.refine(frames, initial_poses);  // frames[0] is the reference
 //
 // A frame that overlaps no frame connected to the reference (overlap test by projection at the
-// initial poses) is reported in report.isolated with the verdict no_overlap, and its pose is
-// returned as given; the connected frames are still refined. ICP-bundle estimates no quadrics
-// (RefinementResult::quadrics is empty) and no covariance (zero blocks).
+// initial poses), or that a solve finds tied to it by no pair with min_pair_terms
+// correspondences, is reported in report.isolated with the verdict no_overlap, and its pose is
+// returned as given; the connected frames are still refined. A window whose last solve does
+// not observe every solved pose (report.degeneracy below params.degeneracy_threshold: one
+// plane) is `degenerate`. ICP-bundle estimates no quadrics (RefinementResult::quadrics is
+// empty) and no covariance (zero blocks); refines_quadrics() is false.
 #pragma once
 
 #include "jpcr/backend/icp_bundle_params.hpp"
@@ -33,6 +36,7 @@ class IcpBundle final : public Refiner {
                           const std::vector<Eigen::Isometry3d>& initial_poses) const;
 
   std::string name() const override { return "icp-bundle"; }
+  bool refines_quadrics() const override { return false; }
   /// The interface's joint parameters (their Quad IT part is what a caller would run on the
   /// reference); ICP-bundle uses none of them.
   const JointParams& params() const override { return joint_; }

@@ -142,7 +142,8 @@ class Refiner {
 
   virtual std::string name() const = 0;
   virtual const JointParams& params() const = 0;
-  /// Whether RefinementResult::quadrics are refined; Q-full returns the initial ones as given.
+  /// Whether RefinementResult::quadrics are refined; Q-full returns the initial ones as given,
+  /// ICP-bundle none. A refiner that wraps another must pass this on.
   virtual bool refines_quadrics() const { return true; }
 };
 

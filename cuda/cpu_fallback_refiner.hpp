@@ -26,6 +26,7 @@ class CpuFallbackRefiner final : public Refiner {
                           const QuadricMap& initial_quadrics) const override;
   std::string name() const override { return gpu_->name(); }
   const JointParams& params() const override { return gpu_->params(); }
+  bool refines_quadrics() const override { return gpu_->refines_quadrics(); }
   /// True once a GPU failure sent the refinements to the CPU.
   bool on_cpu() const { return failed_; }
 

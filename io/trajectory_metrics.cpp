@@ -134,8 +134,11 @@ RpeResult compute_rpe(const Trajectory& ground_truth_in, const Trajectory& estim
   return {error_statistics(translation), error_statistics(rotation)};
 }
 
-RelativeErrors compute_relative_errors(const Trajectory& ground_truth, const Trajectory& estimate,
-                                       double max_difference) {
+RelativeErrors compute_relative_errors(const Trajectory& ground_truth_in,
+                                       const Trajectory& estimate_in, double max_difference) {
+  // In time order, as the adjacency of estimate poses below assumes (compute_rpe does the same).
+  const Trajectory ground_truth = sorted_by_time(ground_truth_in);
+  const Trajectory estimate = sorted_by_time(estimate_in);
   const auto matches =
       associate_timestamps(stamps_of(ground_truth), stamps_of(estimate), max_difference);
   RelativeErrors result;

@@ -58,8 +58,9 @@ struct RelativeErrors {
 };
 
 /// The paper's relative error: per pair of consecutive estimate poses that both have ground
-/// truth within max_difference (s), the error of the estimated motion. A pair that spans an
-/// estimate pose without ground truth is left out. `estimate` is in time order.
+/// truth within max_difference (s), the error of the estimated motion, in time order. A pair
+/// that spans an estimate pose without ground truth is left out. ground_truth_frames index the
+/// ground truth sorted by time (as a file gives it).
 RelativeErrors compute_relative_errors(const Trajectory& ground_truth, const Trajectory& estimate,
                                        double max_difference = 0.02);
 

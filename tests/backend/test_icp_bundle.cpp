@@ -70,6 +70,24 @@ TEST(IcpBundle, AWindowOnOnePlaneIsDegenerate) {
   EXPECT_GT(good.report.degeneracy, 10 * IcpBundleParams{}.degeneracy_threshold);
 }
 
+// Frames 2 and 3 start 25 cm along the reference camera's axis from where frame 1 sees them, but
+// right for each other: their pairs with frame 1 pass the overlap test by projection, yet every
+// correspondence is farther apart than max_distance (10 cm). A solve then has only the pair
+// (2, 3), which ties nothing to the gauge: both are reported isolated and returned as given,
+// not solved against each other alone (held by nothing but the damping).
+TEST(IcpBundle, FramesTiedToTheGaugeByNoSolvedPairAreHeld) {
+  const JointTestWindow w = render_window(3, 160);
+  Eigen::Isometry3d shift = Eigen::Isometry3d::Identity();
+  shift.translation() = Eigen::Vector3d(0.0, 0.0, 0.25);
+  const std::vector<Eigen::Isometry3d> start = {w.truth[0], shift * w.truth[1], shift * w.truth[2]};
+  const RefinementResult r = IcpBundle().refine(w.vertices, w.camera, start);
+  print_report(r.report);
+  EXPECT_EQ(r.report.verdict, RefinementVerdict::kNoOverlap) << to_string(r.report.verdict);
+  EXPECT_EQ(r.report.isolated, (std::vector<int>{1, 2}));
+  for (int j = 0; j < 3; ++j)
+    EXPECT_TRUE(bitwise_equal(r.poses[j], start[j])) << "pose " << j;
+}
+
 // Ceres' GradientChecker differentiates Evaluate numerically and compares both Jacobians in the
 // manifold's tangent space, at random poses and correspondences.
 TEST(PointToPlaneCost, AnalyticJacobianMatchesNumeric) {

@@ -232,6 +232,7 @@ class CountingRefiner : public Refiner {
   }
   std::string name() const override { return inner_->name(); }
   const JointParams& params() const override { return inner_->params(); }
+  bool refines_quadrics() const override { return inner_->refines_quadrics(); }
 
  private:
   std::unique_ptr<Refiner> inner_;

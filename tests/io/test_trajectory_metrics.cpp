@@ -103,6 +103,10 @@ TEST(Metrics, RelativeErrorsSkipPairsAcrossAGroundTruthGap) {
   // Of pairs (6, 7) [error 1 cm] and (3, 6) [left out], only (6, 7) counts: 1 cm in 6 pairs
   // (counting (3, 6) gives 1 cm in two of 7).
   EXPECT_NEAR(rel.translation_rms, 0.01 / std::sqrt(6.0), 1e-12);
+  // An estimate out of time order gives the same pairs.
+  const RelativeErrors reversed = compute_relative_errors(gt, Trajectory(est.rbegin(), est.rend()));
+  EXPECT_EQ(reversed.pairs, 6u);
+  EXPECT_EQ(reversed.translation_rms, rel.translation_rms);
 }
 
 TEST(Metrics, RpePerSecondPairsFramesOneSecondApart) {

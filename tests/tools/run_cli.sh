@@ -70,6 +70,36 @@ expect 1 "$last" -- "$run" --dataset "$tmp/seq_bad" --method j-ftf --out "$tmp/f
 # no staging left. A run killed outright (SIGKILL) leaves its staging directory, which the next
 # run into the same OUT removes. The 30-frame sequence takes seconds; the signal is sent as
 # soon as the staging directory appears, before the first frame is done.
+# report.json's errors are jpcr_eval traj's on trajectory.txt: against the ground truth as
+# recorded, over the frames run (--frames 3:17), with a gap in the motion capture (no ground
+# truth within 20 ms of depth frame 10) that neither may bridge with a neighbour's pose.
+cp -r "$src/tests/data/tum_fr1_xyz_20" "$tmp/tum"
+t10=$(grep -v '^#' "$tmp/tum/depth.txt" | sed -n 11p | cut -d' ' -f1)
+awk -v t="$t10" '/^#/ || ($1 - t) * ($1 - t) >= 0.0004' "$src/tests/data/tum_fr1_xyz_20/groundtruth.txt" \
+  > "$tmp/tum/groundtruth.txt"
+expect 0 "icp-ftf " -- "$run" --dataset "$tmp/tum" --config "$src/configs/tum_fr1.yaml" \
+  --method icp-ftf --frames 3:17 --out "$tmp/tumrun"
+"$eval_bin" traj --gt "$tmp/tum/groundtruth.txt" --est "$tmp/tumrun/trajectory.txt" --json \
+  > "$tmp/tumeval.json" || { echo "FAIL: jpcr_eval on the TUM run"; fail=1; }
+/usr/bin/python3 - "$tmp" <<'PY' || fail=1
+import json, sys
+t = sys.argv[1]
+r = json.load(open(t + "/tumrun/report.json"))["errors"]
+e = json.load(open(t + "/tumeval.json"))
+pairs = [(r["ate_rmse_m"], e["ate"]["translation_m"]["rmse"]),
+         (r["rpe_frame_translation_rmse_m"], e["rpe_per_frame"]["translation_m"]["rmse"]),
+         (r["rpe_frame_rotation_rmse_deg"], e["rpe_per_frame"]["rotation_deg"]["rmse"]),
+         (r["relative_translation_rms_m"], e["relative"]["translation_rms_m"]),
+         (r["relative_rotation_rms_rad"], e["relative"]["rotation_rms_rad"])]
+assert all(abs(a - b) <= 1e-9 * abs(b) for a, b in pairs), pairs
+# 14 frames, frame 10 (the 8th) without ground truth: 13 consecutive pairs less the two that
+# touch it for the relative errors; RPE, as evaluate_rpe.py, also skips the pair ending at the
+# last estimate: 10.
+assert e["rpe_per_frame"]["translation_m"]["count"] == 10, e["rpe_per_frame"]
+assert e["relative"]["pairs"] == 11, e["relative"]
+print("ok: report.json's errors are jpcr_eval's against the recorded ground truth")
+PY
+
 expect 0 "wrote 30 frames" -- "$synth" --scene room_spheres --frames 30 --size 160x120 --seed 4 \
   --out "$tmp/long"
 wait_for_staging() {  # $1: OUT; up to 20 s

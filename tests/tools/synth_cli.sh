@@ -65,9 +65,13 @@ if ! diff -r "$tmp/rail" "$tmp/again" > /dev/null; then echo "FAIL: not determin
 # The camera file is usable by the other tools, and --config takes it back.
 expect 0 "wrote 2 frames" -- "$synth" --config "$tmp/rail/camera.yaml" --frames 2 --out "$tmp/cfg"
 grep -q "^width: 80$" "$tmp/cfg/camera.yaml" || { echo "FAIL: --config size not kept"; fail=1; }
-# The command recorded in the lists names --config (and --params), which change the data.
+# The command recorded in the lists names --config and --params, which change the data.
 grep -q "^# jpcr_synth .* --config $tmp/rail/camera.yaml$" "$tmp/cfg/groundtruth.txt" ||
   { echo "FAIL: --config not in the recorded command: $(head -1 "$tmp/cfg/groundtruth.txt")"; fail=1; }
+expect 0 "wrote 1 frames" -- "$synth" --params "$src/configs/default.yaml" --frames 1 --size 80x60 \
+  --out "$tmp/params"
+grep -q "^# jpcr_synth .* --params $src/configs/default.yaml$" "$tmp/params/depth.txt" ||
+  { echo "FAIL: --params not in the recorded command: $(head -1 "$tmp/params/depth.txt")"; fail=1; }
 
 # Bad input.
 printf 'view: {eye: [0, 0, 1], target: [0, 1, 1]}\nsurfaces:\n  - {type: sphere, center: [0, 2, 1], radius: 0}\n' > "$tmp/bad.yaml"

@@ -6,6 +6,8 @@
 // Quad IT's, from the same run.
 #include <benchmark/benchmark.h>
 
+#include <string>
+
 #include "ratio_reporter.hpp"
 
 #include "jpcr/io/synthetic_sequence.hpp"
@@ -69,11 +71,20 @@ BENCHMARK(BM_Normals)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->UseRea
 }  // namespace
 
 int main(int argc, char** argv) {
+  // The ratios follow the console table; --benchmark_format=json|csv gets the library's own.
+  bool console = true;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a.rfind("--benchmark_format=", 0) == 0) console = a == "--benchmark_format=console";
+  }
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
   jpcr::bench::RatioReporter reporter(
       {{"BM_QuadIT", "BM_CgalJetPeer"}, {"BM_QuadLS", "BM_QuadIT"}});
-  benchmark::RunSpecifiedBenchmarks(&reporter);
+  if (console)
+    benchmark::RunSpecifiedBenchmarks(&reporter);
+  else
+    benchmark::RunSpecifiedBenchmarks();
   benchmark::Shutdown();
   return 0;
 }

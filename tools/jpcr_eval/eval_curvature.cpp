@@ -82,11 +82,10 @@ int run_curvature(int argc, char** argv) {
       "Principal-curvature error against ground truth: RMS of k1 and k2 (1/m) over\n"
       "pixels valid in both, median absolute error, and coverage (the fraction of\n"
       "ground-truth pixels of the compared frames the estimate covers). Frames are\n"
-      "matched by stamp\n"
-      "(GT/curvature/<stamp>.npy and EST/curvature/<stamp>.npy). With --support R\n"
-      "only interior pixels count: those whose (2R+1)x(2R+1) window has ground truth\n"
-      "everywhere, so a patch fit of radius R sees one smooth surface (no crease,\n"
-      "rim or silhouette in it).");
+      "matched by stamp (GT/curvature/<stamp>.npy and EST/curvature/<stamp>.npy).\n"
+      "With --support R only interior pixels count: those whose (2R+1)x(2R+1) window\n"
+      "has ground truth everywhere, so a patch fit of radius R sees one smooth surface\n"
+      "(no crease, rim or silhouette in it).");
   args.required("gt", "ground-truth directory (jpcr_synth output)")
       .required("est", "estimate directory (jpcr_curvature or jpcr_run output)")
       .option("support",
