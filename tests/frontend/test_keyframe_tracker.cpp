@@ -1,5 +1,6 @@
 // The tracker: ICP-ftf along the synthetic drift rig (rail, 10 mm per frame, noise-free), the
 // keyframe policy, and a failed frame that keeps the last good motion and says so.
+#include <cstdint>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -20,6 +21,17 @@ SyntheticSequence rail(int frames) {
   options.trajectory = TrajectoryKind::kRail;
   options.frames = frames;
   return make_synthetic_sequence(options);
+}
+
+// A 160x120 walk through `scene`.
+SyntheticSequenceOptions small_walk(const std::string& scene, int frames, std::uint64_t seed) {
+  SyntheticSequenceOptions options;
+  options.scene = scene;
+  options.frames = frames;
+  options.width = 160;
+  options.height = 120;
+  options.seed = seed;
+  return options;
 }
 
 Trajectory track_all(const FrameSource& source, KeyframeTracker& tracker,
@@ -77,12 +89,7 @@ TEST(KeyframeTracker, KeyframesFollowTheTranslationThreshold) {
 TEST(KeyframeTracker, OverlapIsTheSharedViewNotTheDepthNoise) {
   std::vector<double> overlap[2];
   for (int noisy = 0; noisy < 2; ++noisy) {
-    SyntheticSequenceOptions o;
-    o.scene = "room_spheres";
-    o.frames = 8;
-    o.width = 160;
-    o.height = 120;
-    o.seed = 5;
+    SyntheticSequenceOptions o = small_walk("room_spheres", 8, 5);
     o.noise = noisy ? "range:2" : "none";
     const SyntheticSequence seq = make_synthetic_sequence(o);
     FrontendParams params;
@@ -133,13 +140,7 @@ TEST(KeyframeTracker, AFailedFrameKeepsTheLastGoodMotion) {
 // starts no keyframe, or every frame of such a view would be one; J-ftf could not observe the
 // motion either.
 TEST(KeyframeTracker, ADegenerateAlignmentStartsNoKeyframeFrameToFrame) {
-  SyntheticSequenceOptions options;
-  options.scene = "corridor";
-  options.frames = 5;
-  options.width = 160;
-  options.height = 120;
-  options.seed = 1;
-  const SyntheticSequence seq = make_synthetic_sequence(options);
+  const SyntheticSequence seq = make_synthetic_sequence(small_walk("corridor", 5, 1));
   KeyframeTracker tracker(FrontendParams{}, seq.ground_truth(0).value());
   int degenerate = 0;
   for (std::size_t i = 0; i < seq.size(); ++i) {
