@@ -182,8 +182,7 @@ void check_scans(const std::string& path, const std::vector<CObservation3DRangeS
                        ") is not after scan " + std::to_string(i - 1) +
                        " (t = " + std::to_string(t0) + "): the scans must be in time order");
     const CameraIntrinsics c = camera_of(*scans[i]);
-    if (check_cameras && !(c.fx == first.fx && c.fy == first.fy && c.cx == first.cx &&
-                           c.cy == first.cy && c.width == first.width && c.height == first.height))
+    if (check_cameras && !same_pinhole(c, first))
       throw InputError(path + ": scan " + std::to_string(i) + "'s camera differs from scan 0's (" +
                        describe(c) + " against " + describe(first) +
                        "); give one with --config to use it for every scan");

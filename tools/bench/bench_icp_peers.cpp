@@ -144,6 +144,7 @@ int run(int argc, char** argv) {
               << " frames; jpcr threads " << jpcr_threads << ", OpenCV threads "
               << cv::getNumThreads() << '\n';
 
+    const bool with_peer = !args.get_flag("only-jpcr");
     OpenCvIcp opencv(source->camera());
     MethodRun ours, peer;
     ours.name = "jpcr ICP-ftf";
@@ -165,7 +166,7 @@ int run(int argc, char** argv) {
             ++ours.verdicts[to_string(r.icp.verdict)];
           }
           ours.trajectory.push_back(r.T_wc);
-        } else if (!args.get_flag("only-jpcr")) {
+        } else if (with_peer) {
           const std::optional<Eigen::Isometry3d> motion = opencv.track(frame);
           if (i > 0) {
             peer.ms.push_back(ms_since(t0));
@@ -181,11 +182,10 @@ int run(int argc, char** argv) {
     }
     if (args.has("save")) {
       write_trajectory(args.get("save") + "_jpcr.txt", ours.trajectory, "jpcr ICP-ftf");
-      if (!args.get_flag("only-jpcr"))
+      if (with_peer)
         write_trajectory(args.get("save") + "_opencv.txt", peer.trajectory,
                          "cv::rgbd::ICPOdometry");
     }
-    const bool with_peer = !args.get_flag("only-jpcr");
     const bool per_second = rpe_per_second(ours.trajectory);
     const Metrics a = evaluate(gt, ours, per_second);
     const Metrics b = with_peer ? evaluate(gt, peer, per_second) : Metrics{};
