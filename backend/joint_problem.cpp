@@ -75,8 +75,8 @@ QuadricMap refined_map(const QuadricMap& initial, const JointState& state,
   QuadricMap map = initial;
   if (!estimate_quadrics) return map;
   const JointTermParams terms = params.terms(true);
-  const std::vector<int> inliers = reference_inliers(
-      reference, params.quadric.pattern.for_width(reference.width()), terms, state);
+  const std::vector<int> inliers =
+      reference_inliers(reference, params.quadric.pattern_for(reference.width()), terms, state);
   for (int v = 0; v < map.height(); ++v)
     for (int u = 0; u < map.width(); ++u) {
       const std::size_t i = static_cast<std::size_t>(v) * map.width() + u;

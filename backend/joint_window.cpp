@@ -30,7 +30,7 @@ RefinementResult refine_window(const std::vector<VertexMap>& vertices,
                                const QuadricMap& initial_quadrics, const JointParams& params,
                                bool estimate_quadrics, const std::string& method) {
   check_joint_inputs(vertices, camera, initial_poses, initial_quadrics);
-  const JointSystem system(vertices, camera, params.quadric.pattern.for_width(camera.width),
+  const JointSystem system(vertices, camera, params.quadric.pattern_for(camera.width),
                            params.terms(estimate_quadrics));
   CpuJointProblem problem(system, initial_joint_state(initial_poses, initial_quadrics));
   return run_joint_refinement(problem, params, estimate_quadrics, method, initial_quadrics,

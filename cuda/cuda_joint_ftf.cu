@@ -556,7 +556,7 @@ RefinementResult CudaJointFrameToFrame::refine(const std::vector<VertexMap>& ver
   if (vertices.size() != 2) throw std::invalid_argument("j-ftf: needs exactly two frames");
   check_joint_inputs(vertices, camera, initial_poses, initial_quadrics);
   std::lock_guard<std::mutex> lock(mutex_);
-  system_->load(vertices, camera, params_.quadric.pattern.for_width(camera.width), initial_poses,
+  system_->load(vertices, camera, params_.quadric.pattern_for(camera.width), initial_poses,
                 initial_quadrics);
   return run_joint_refinement(*system_, params_, true, name(), initial_quadrics, vertices[0]);
 }

@@ -212,7 +212,7 @@ QuadricMap CudaQuadricFit::fit(const VertexMap& vertices, const NormalMap* norma
   const int width = vertices.width(), height = vertices.height();
   const std::size_t pixels = vertices.size();
   if (pixels == 0) return QuadricMap(width, height);
-  const NeighbourhoodPattern pattern = params_.pattern.for_width(width);
+  const NeighbourhoodPattern pattern = params_.pattern_for(width);
   const std::size_t pattern_size = pattern.offsets.size();
 
   std::lock_guard<std::mutex> lock(mutex_);

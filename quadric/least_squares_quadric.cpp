@@ -93,7 +93,7 @@ QuadricMap LeastSquaresQuadric::estimate(const VertexMap& vertices,
                                          const NormalMap& normals) const {
   if (normals.width() != vertices.width() || normals.height() != vertices.height())
     throw std::invalid_argument("LeastSquaresQuadric: normal map and vertex map differ in size");
-  const NeighbourhoodPattern pattern = params_.pattern.for_width(vertices.width());
+  const NeighbourhoodPattern pattern = params_.pattern_for(vertices.width());
   QuadricMap map(vertices.width(), vertices.height());
 #pragma omp parallel for schedule(dynamic, 4)
   for (int v = 0; v < vertices.height(); ++v) {

@@ -241,6 +241,17 @@ void QuadricParams::validate() const {
                      std::to_string(pattern.radius) + "): no pixel could have a quadric");
 }
 
+NeighbourhoodPattern QuadricParams::pattern_for(int width) const {
+  NeighbourhoodPattern scaled = pattern.for_width(width);
+  if (fit.min_samples > scaled.size())
+    throw InputError("min_samples: " + std::to_string(fit.min_samples) + " exceeds the " +
+                     std::to_string(scaled.size()) + " samples of the pattern scaled to " +
+                     std::to_string(width) + " px wide (radius " + std::to_string(scaled.radius) +
+                     ", stride " + std::to_string(scaled.stride) +
+                     "): no pixel could have a quadric");
+  return scaled;
+}
+
 QuadricMap CurvatureEstimator::estimate(const VertexMap& vertices) const {
   return estimate(vertices, estimate_normals(vertices, params().normals));
 }
@@ -256,7 +267,7 @@ QuadricMap QuadricFit::estimate(const VertexMap& vertices, const NormalMap& norm
   // pixel), so that the planes' margin is at most the image's size.
   std::vector<PixelOffset> inside;
   int reach = 0;
-  for (const PixelOffset& o : params_.pattern.for_width(vertices.width()).offsets) {
+  for (const PixelOffset& o : params_.pattern_for(vertices.width()).offsets) {
     if (std::abs(o.du) >= vertices.width() || std::abs(o.dv) >= vertices.height()) continue;
     inside.push_back(o);
     reach = std::max({reach, std::abs(o.du), std::abs(o.dv)});

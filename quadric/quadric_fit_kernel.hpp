@@ -4,6 +4,8 @@
 // pixels in SIMD lanes (pixel_lane_sums.hpp, pixel_lane_steps.hpp); tests compare the two.
 #pragma once
 
+#include <cstddef>
+
 #include <Eigen/Core>
 
 #include "jpcr/quadric/dense_cholesky.hpp"
@@ -48,7 +50,9 @@ struct VertexView {
   int height = 0;
 
   JPCR_HD bool in_bounds(int u, int v) const { return u >= 0 && v >= 0 && u < width && v < height; }
-  JPCR_HD const Eigen::Vector3f& operator()(int u, int v) const { return data[v * width + u]; }
+  JPCR_HD const Eigen::Vector3f& operator()(int u, int v) const {
+    return data[static_cast<std::ptrdiff_t>(v) * width + u];
+  }
 };
 
 /// True for a finite float (false for NaN and ±Inf) without <cmath>'s host-only overloads.

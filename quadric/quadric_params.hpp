@@ -26,6 +26,10 @@ struct QuadricParams {
   NormalEstimationParams normals;
   QuadricFitParams fit;
 
+  /// pattern.for_width(width), refused (InputError) when it has fewer samples than
+  /// fit.min_samples: validate() checks the pattern at reference_width, and a narrower image
+  /// scales it down (r = 5, s = 2 at 320 px: 97 of 129), where no pixel could have a quadric.
+  NeighbourhoodPattern pattern_for(int width) const;
   void validate() const;
 };
 

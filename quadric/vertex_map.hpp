@@ -21,16 +21,23 @@ inline bool is_valid(const Eigen::Vector3f& x) {
   return std::isfinite(x.z());
 }
 
-/// A depth value is a measurement when it is finite and positive.
+/// The farthest depth taken as a measurement (m). Beyond it a depth value is a sensor's
+/// "no return" marker (FLT_MAX, 1e30), never a range: the float sums of the CPU fits would
+/// overflow on such a vertex (a sample dropped by a zero weight then adds 0 · inf = NaN), while
+/// the reference kernels skip it. Vertex maps handed to the fits directly must keep within it.
+inline constexpr float kMaxMeasurableDepth = 1e4f;
+
+/// A depth value is a measurement when it is finite, positive and at most kMaxMeasurableDepth.
 inline bool is_valid_depth(float z) {
-  return std::isfinite(z) && z > 0.0f;
+  return std::isfinite(z) && z > 0.0f && z <= kMaxMeasurableDepth;
 }
 
 inline Eigen::Vector3f invalid_vector() {
   return Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
 }
 
-/// Back-projects every pixel; pixels without depth, or outside [min_depth, max_depth], get NaN.
+/// Back-projects every pixel; pixels without a measurement (is_valid_depth), or outside
+/// [min_depth, max_depth], get NaN.
 /// Throws std::invalid_argument when the image size differs from the camera's.
 VertexMap compute_vertex_map(const DepthImage& depth, const CameraIntrinsics& camera,
                              float min_depth = 0.0f,

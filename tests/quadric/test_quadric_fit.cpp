@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -154,6 +155,25 @@ TEST(QuadricFit, MinSamplesAboveThePatternIsRefused) {
               std::string::npos)
         << e.what();
   }
+  // Valid at the reference width, but the pattern scaled to 320 px (r = 5, s = 2) has 97
+  // samples: every estimator refuses it instead of marking every pixel invalid.
+  p.fit.min_samples = 110;
+  EXPECT_NO_THROW(p.validate());
+  const VertexMap vertices(320, 240, Eigen::Vector3f(0.0f, 0.0f, 1.0f));
+  EXPECT_EQ(p.pattern.for_width(320).size(), 97);
+  for (const CurvatureEstimator* e : std::initializer_list<const CurvatureEstimator*>{
+           new QuadricFit(p), new LeastSquaresQuadric(p)}) {
+    try {
+      e->estimate(vertices);
+      ADD_FAILURE() << e->name();
+    } catch (const InputError& error) {
+      EXPECT_NE(std::string(error.what())
+                    .find("min_samples: 110 exceeds the 97 samples of the pattern scaled to 320"),
+                std::string::npos)
+          << error.what();
+    }
+    delete e;
+  }
 }
 
 TEST(QuadricFit, AllZeroDepthGivesAnAllInvalidMap) {
@@ -167,6 +187,29 @@ TEST(QuadricFit, AllZeroDepthGivesAnAllInvalidMap) {
     for (const Eigen::Vector2f& k : map.curvature)
       ASSERT_TRUE(std::isnan(k.x()) && std::isnan(k.y())) << e->name();
     delete e;
+  }
+}
+
+// A "no return" marker far beyond any range (1e25 m, FLT_MAX) is no measurement: the maps are
+// those of the same depth with 0 there. Before kMaxMeasurableDepth, the CPU fit's float sums
+// overflowed on that vertex and 24 pixels of this plane came out singular.
+TEST(QuadricFit, AFarNoReturnMarkerIsNoMeasurement) {
+  const CameraIntrinsics camera = synthetic_camera(64, 48);
+  DepthImage hole(camera.width, camera.height, 1.0f);
+  hole(40, 30) = 0.0f;
+  const QuadricMap expected = QuadricFit().estimate(compute_vertex_map(hole, camera));
+  for (const float marker : {1e25f, std::numeric_limits<float>::max()}) {
+    DepthImage far = hole;
+    far(40, 30) = marker;
+    const QuadricMap map = QuadricFit().estimate(compute_vertex_map(far, camera));
+    EXPECT_EQ(summarize(map).valid, summarize(expected).valid) << marker;
+    for (int v = 0; v < camera.height; ++v)
+      for (int u = 0; u < camera.width; ++u) {
+        ASSERT_EQ(map.status(u, v), expected.status(u, v)) << u << "," << v;
+        if (map.status(u, v) == QuadricStatus::kValid) {
+          ASSERT_EQ(map.curvature(u, v), expected.curvature(u, v)) << u << "," << v;
+        }
+      }
   }
 }
 

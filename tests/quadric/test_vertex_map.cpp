@@ -1,4 +1,5 @@
 #include <cmath>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -18,13 +19,19 @@ TEST(VertexMap, InvalidDepthGivesNaNNeverZero) {
   depth(1, 0) = std::numeric_limits<float>::quiet_NaN();
   depth(2, 0) = std::numeric_limits<float>::infinity();
   depth(3, 0) = -2.0f;
+  depth(0, 1) = std::numeric_limits<float>::max();  // a "no return" marker, not a range
+  depth(1, 1) = 1e25f;
+  depth(2, 1) = kMaxMeasurableDepth;  // the farthest measurement
   const VertexMap v = compute_vertex_map(depth, c);
   for (int u = 0; u < 4; ++u)
     EXPECT_FALSE(is_valid(v(u, 0))) << u;
-  ASSERT_TRUE(is_valid(v(1, 1)));
-  EXPECT_FLOAT_EQ(v(1, 1).z(), 1.0f);
+  EXPECT_FALSE(is_valid(v(0, 1)));
+  EXPECT_FALSE(is_valid(v(1, 1)));
+  EXPECT_TRUE(is_valid(v(2, 1)));
+  ASSERT_TRUE(is_valid(v(1, 2)));
+  EXPECT_FLOAT_EQ(v(1, 2).z(), 1.0f);
   EXPECT_FLOAT_EQ(v(3, 2).x(), static_cast<float>((3 - 1.5) / c.fx));
-  EXPECT_NEAR(valid_depth_fraction(depth), 8.0 / 12.0, 1e-12);
+  EXPECT_NEAR(valid_depth_fraction(depth), 6.0 / 12.0, 1e-12);
 }
 
 TEST(VertexMap, DepthRangeIsApplied) {
