@@ -57,6 +57,9 @@ StagedOutput::StagedOutput(std::string target, std::vector<std::string> layout)
   fs::path t = fs::path(target_).lexically_normal();
   if (t.filename().empty()) t = t.parent_path();  // "out/" → "out"
   fs::path parent = t.has_parent_path() ? t.parent_path() : fs::path(".");
+  for (fs::path missing = parent; !missing.empty() && !fs::exists(missing, ec);
+       missing = missing.parent_path())
+    created_.insert(created_.begin(), missing.string());
   ensure_directory(parent.string());
   // A hidden sibling, so that renames into the target stay on one file system; inside the
   // target when that is another file system (a mount point, a link to another disk), where a
@@ -86,6 +89,22 @@ StagedOutput::~StagedOutput() {
   if (committed_ || keep_staging_) return;
   std::error_code ec;
   fs::remove_all(staging_, ec);  // a failed run leaves nothing behind
+  for (auto d = created_.rbegin(); d != created_.rend(); ++d)
+    fs::remove(*d, ec);  // only while empty
+}
+
+void StagedOutput::require_apart_from(const std::string& input, const std::string& option) const {
+  if (input.empty()) return;
+  std::error_code ec;
+  const fs::path in = fs::weakly_canonical(fs::absolute(input, ec), ec);
+  for (const std::string& name : layout_) {
+    const fs::path entry = fs::path(target_) / name;
+    const fs::path inside =
+        in.lexically_relative(fs::weakly_canonical(fs::absolute(entry, ec), ec));
+    if (!inside.empty() && *inside.begin() != "..")
+      throw InputError(input + ": " + option + " lies in " + entry.string() +
+                       ", which this run replaces with its own output (give another --out)");
+  }
 }
 
 std::string StagedOutput::as_target(std::string message) const {
@@ -186,6 +205,19 @@ bool is_input_directory_file(const fs::path& inside) {
   return first.rfind("associations", 0) == 0 && inside.extension() == ".txt";
 }
 
+// Whether `dir` is a dataset (depth.txt, associations*.txt) or jpcr_run's or jpcr_curvature's
+// results (report.json, summary.json).
+bool is_dataset_or_results(const fs::path& dir) {
+  std::error_code ec;
+  for (const char* marker : {"depth.txt", "report.json", "summary.json"})
+    if (fs::exists(dir / marker, ec)) return true;
+  for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.rfind("associations", 0) == 0 && e.path().extension() == ".txt") return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 void require_output_file_apart_from(const std::string& target, const std::string& input,
@@ -194,20 +226,32 @@ void require_output_file_apart_from(const std::string& target, const std::string
   if (fs::equivalent(target, input, ec))
     throw InputError(target + ": is " + option + " " + input +
                      " itself; writing it would destroy the input (give another output file)");
-  if (!fs::is_directory(input, ec)) return;
-  // Both as written (a folder of the dataset may be a link to elsewhere) and with the links of
-  // the target's folder resolved (the dataset reached by another path); the file name itself is
-  // kept, so a groundtruth.txt that is a link still reads as groundtruth.txt.
-  const fs::path as_written = fs::absolute(target, ec)
-                                  .lexically_normal()
-                                  .lexically_relative(fs::absolute(input, ec).lexically_normal());
-  const fs::path file = fs::path(target).filename();
-  const fs::path resolved =
-      (fs::weakly_canonical(fs::absolute(target, ec).parent_path(), ec) / file)
-          .lexically_relative(fs::weakly_canonical(input, ec));
-  if (is_input_directory_file(as_written) || is_input_directory_file(resolved))
-    throw InputError(target + ": is a file of " + option + " " + input +
-                     "; writing it would destroy the input (give another output file)");
+  if (fs::is_directory(input, ec)) {
+    // Both as written (a folder of the dataset may be a link to elsewhere) and with the links of
+    // the target's folder resolved (the dataset reached by another path); the file name itself is
+    // kept, so a groundtruth.txt that is a link still reads as groundtruth.txt.
+    const fs::path as_written = fs::absolute(target, ec)
+                                    .lexically_normal()
+                                    .lexically_relative(fs::absolute(input, ec).lexically_normal());
+    const fs::path file = fs::path(target).filename();
+    const fs::path resolved =
+        (fs::weakly_canonical(fs::absolute(target, ec).parent_path(), ec) / file)
+            .lexically_relative(fs::weakly_canonical(input, ec));
+    if (is_input_directory_file(as_written) || is_input_directory_file(resolved))
+      throw InputError(target + ": is a file of " + option + " " + input +
+                       "; writing it would destroy the input (give another output file)");
+  }
+}
+
+void require_not_dataset_or_results_file(const std::string& target) {
+  std::error_code ec;
+  const fs::path absolute = fs::absolute(target, ec).lexically_normal();
+  for (fs::path dir = absolute.parent_path(); !dir.empty(); dir = dir.parent_path()) {
+    if (is_dataset_or_results(dir) && is_input_directory_file(absolute.lexically_relative(dir)))
+      throw InputError(target + ": is a file of the dataset or results in " + dir.string() +
+                       "; writing it would destroy them (give another output file)");
+    if (dir == dir.root_path()) break;
+  }
 }
 
 }  // namespace jpcr

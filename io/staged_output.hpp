@@ -28,7 +28,8 @@ class StagedOutput {
   /// target, staged this time or not, so no output of an earlier run survives beside the new
   /// ones, and leaves every other entry alone. Empty `layout`: the names staged this time.
   /// Throws InputError naming `target` when it is empty, exists and is not a directory, or its
-  /// parent cannot be created.
+  /// parent cannot be created. The parent directories it creates are removed again (when still
+  /// empty) unless commit() succeeds.
   StagedOutput(std::string target, std::vector<std::string> layout);
   ~StagedOutput();  // removes the staging directory unless committed
   StagedOutput(const StagedOutput&) = delete;
@@ -55,6 +56,11 @@ class StagedOutput {
   std::string path(const std::string& name) const;
   const std::string& target() const { return target_; }
 
+  /// Throws InputError when `input` (a dataset, a --config or --params file) is, or lies
+  /// inside, one of the target's entries of the layout, which commit() replaces: e.g. a
+  /// dataset copied to OUT/curvature. `option` names the input in the message ("--dataset").
+  void require_apart_from(const std::string& input, const std::string& option) const;
+
   /// Moves the staged entries into the target (same file system: renames), all or nothing:
   /// when an entry cannot be replaced, the ones already moved go back and the target is left as
   /// it was. Throws InputError naming that entry.
@@ -63,6 +69,7 @@ class StagedOutput {
  private:
   std::string target_, staging_;
   std::vector<std::string> layout_;
+  std::vector<std::string> created_;  // the target's missing ancestors, made here, deepest last
   bool committed_ = false;
   bool keep_staging_ = false;  // a failed roll back left earlier outputs in it
 };
@@ -83,5 +90,12 @@ void require_output_apart_from(const std::string& target, const std::string& inp
 /// allowed. `option` names the input in the message ("--gt").
 void require_output_file_apart_from(const std::string& target, const std::string& input,
                                     const std::string& option);
+
+/// Throws InputError when the file `target` is one of those files (as above) of any dataset or
+/// results directory, an input of this run or not: one that holds depth.txt,
+/// associations*.txt, report.json or summary.json. Writing run1/report.json or seq/depth.txt
+/// would destroy them. Checked after require_output_file_apart_from, whose message names the
+/// input.
+void require_not_dataset_or_results_file(const std::string& target);
 
 }  // namespace jpcr

@@ -125,6 +125,10 @@ expect 1 "is a file of --gt" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tm
 printf 'quadric:\n  pattern:\n    reference_width: 1\n' > "$tmp/tiny_ref.yaml"
 expect 1 "tiny_ref.yaml: quadric: pattern (radius 6, stride 3 at reference_width 1) scaled to 160 px wide" -- \
   "$curv" --dataset "$tmp/seq" --params "$tmp/tiny_ref.yaml" --out "$tmp/x"
+# So does a min_samples that the pattern has at 640 px but not scaled to these 160 px.
+printf 'quadric:\n  fit:\n    min_samples: 129\n' > "$tmp/many.yaml"
+expect 1 "many.yaml: quadric: min_samples: 129 exceeds the" -- \
+  "$curv" --dataset "$tmp/seq" --params "$tmp/many.yaml" --out "$tmp/x"
 # Written whole or not at all: a run with a corrupt last frame leaves no map of the good frames
 # and no staging directory; a second run into an earlier OUT leaves none of the earlier maps.
 cp -r "$tmp/seq" "$tmp/seq_bad"
@@ -136,6 +140,14 @@ expect 1 "$last" -- "$curv" --dataset "$tmp/seq_bad" --out "$tmp/partial"
 expect 0 "wrote 1 curvature maps" -- "$curv" --dataset "$tmp/seq" --frames 2:3 --out "$tmp/it"
 n=$(ls "$tmp/it/curvature" | wc -l)
 [ "$n" = 1 ] || { echo "FAIL: $n maps in OUT after a 1-frame run into the 3-frame run's OUT"; fail=1; }
+# A dataset inside one of the entries a run replaces (OUT/curvature) is refused before the run,
+# and stays whole; a failed run removes the parent directories it made for OUT.
+mkdir -p "$tmp/exp" && cp -r "$tmp/seq" "$tmp/exp/curvature"
+expect 1 "exp/curvature: --dataset lies in .*exp/curvature, which this run replaces" -- \
+  "$curv" --dataset "$tmp/exp/curvature" --out "$tmp/exp"
+[ -e "$tmp/exp/curvature/depth.txt" ] || { echo "FAIL: the dataset in OUT/curvature is gone"; fail=1; }
+expect 1 "$last" -- "$curv" --dataset "$tmp/seq_bad" --out "$tmp/nest1/nest2/out"
+[ ! -e "$tmp/nest1" ] || { echo "FAIL: a failed run left $tmp/nest1"; fail=1; }
 # No pixel to compare (a support wider than any smooth patch) is an error, not an RMS of NaN.
 expect 1 "no pixel is valid in both" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --support 100
 expect 0 "Quad LS" -- "$curv" --help

@@ -39,6 +39,14 @@ expect 0 "translation 1.0000  \[1.0000, 1.0000\]  indistinguishable" -- \
 expect 0 '"verdict": "indistinguishable"' -- \
   "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --baseline "$tmp/est30.txt" --json
 [ -e "$tmp/report.json" ] && { echo "FAIL: partial report written"; fail=1; }
+# Nor a file of another run's results or of a dataset, whatever the inputs.
+mkdir -p "$tmp/run1" "$tmp/seq" && echo '{}' > "$tmp/run1/report.json" && touch "$tmp/seq/depth.txt"
+expect 1 "run1/report.json: is a file of the dataset or results in" -- \
+  "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --out "$tmp/run1/report.json"
+expect 1 "seq/depth.txt: is a file of the dataset or results in" -- \
+  "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --out "$tmp/seq/depth.txt"
+[ "$(cat "$tmp/run1/report.json")" = "{}" ] && [ ! -s "$tmp/seq/depth.txt" ] ||
+  { echo "FAIL: a results or dataset file was overwritten"; fail=1; }
 # --out in a directory not made yet: made, as the other tools do.
 expect 0 "translation" -- "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --out "$tmp/new/dir/r.json"
 [ -s "$tmp/new/dir/r.json" ] || { echo "FAIL: --out in a new directory not written"; fail=1; }

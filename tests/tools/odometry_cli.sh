@@ -90,6 +90,17 @@ expect 2 "summary and --out name the same file" -- \
 mkdir -p "$tmp/adir"
 expect 1 "adir: is a directory" -- "$odo" --dataset "$fr1" --config "$cam" --out "$tmp/x.txt" \
   --summary "$tmp/adir"
+# A directory name ("DIR/") is refused before the run, not after it.
+expect 1 "newdir/: is a directory, not a file" -- "$odo" --dataset "$fr1" --config "$cam" \
+  --out "$tmp/newdir/"
+[ -e "$tmp/newdir" ] && { echo "FAIL: newdir/ made for a refused --out"; fail=1; }
+# Another run's results are never an output file (jpcr_run's trajectory.txt beside its
+# report.json).
+mkdir -p "$tmp/run1" && echo '{}' > "$tmp/run1/report.json" && echo keep > "$tmp/run1/trajectory.txt"
+expect 1 "run1/trajectory.txt: is a file of the dataset or results in" -- \
+  "$odo" --dataset "$fr1" --config "$cam" --frames 2 --out "$tmp/run1/trajectory.txt"
+[ "$(cat "$tmp/run1/trajectory.txt")" = keep ] || { echo "FAIL: run1/trajectory.txt replaced"; fail=1; }
+expect 2 "threads must be in 0..256" -- "$odo" --dataset "$fr1" --threads 300 --out "$tmp/x.txt"
 [ -e "$tmp/x.txt" ] || [ -e "$tmp/x/traj.txt" ] && { echo "FAIL: output written after an error"; fail=1; }
 # A summary that cannot be written where --out can: the run fails and leaves no empty --out
 # directory behind.

@@ -97,6 +97,10 @@ expect 2 "--out needs a non-empty value" -- "$synth" --frames 1 --out ""
 expect 2 "--frames is given twice ('1', then '2')" -- "$synth" --frames 1 --out "$tmp/twice" --frames=2
 [ -e "$tmp/twice" ] && { echo "FAIL: output written after a usage error"; fail=1; }
 expect 2 "each 1-16384" -- "$synth" --size 4294967376x60 --out "$tmp/x"
+# An option missing its value does not take the next option for it; --out=--x still can.
+expect 2 "--out needs a value (the next word, --frames, is an option" -- \
+  "$synth" --out --frames 1
+[ -e ./--frames ] && { echo "FAIL: wrote ./--frames"; fail=1; }
 # Timestamps that collide at 1 us stop the run before anything is written.
 printf 'synthetic:
   trajectory:

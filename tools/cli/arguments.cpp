@@ -63,6 +63,12 @@ bool Arguments::parse(int argc, char** argv, int first) {
       if (!inline_value) {
         if (i + 1 >= argc) throw UsageError("--" + name + " needs a value");
         value = argv[++i];
+        // "--out --ply": the value was left out, and the next option would be taken for it.
+        const std::string next =
+            value.rfind("--", 0) == 0 ? value.substr(2, value.find('=') - 2) : std::string();
+        if (!next.empty() && (specs_.count(next) || next == "help"))
+          throw UsageError("--" + name + " needs a value (the next word, " + value +
+                           ", is an option; write --" + name + "=" + value + " if it is meant)");
       }
       // An empty value is never meant: --out "" would write into the working directory.
       if (value.empty()) throw UsageError("--" + name + " needs a non-empty value");

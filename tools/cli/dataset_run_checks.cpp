@@ -9,15 +9,20 @@
 namespace jpcr::cli {
 
 void check_dataset_run(const Arguments& args, const FrameSource& dataset,
-                       const PatternParams& pattern) {
+                       const QuadricParams& quadric) {
   require_output_apart_from(args.get("out"), args.get("dataset"), "--dataset");
   try {
-    pattern.for_width(dataset.camera().width);
+    quadric.pattern_for(dataset.camera().width);
   } catch (const InputError& e) {
     const bool file = args.has("params") && !args.get("params").empty();
     throw InputError((file ? args.get("params") : std::string("the built-in parameters")) +
                      ": quadric: " + e.what());
   }
+}
+
+void require_inputs_apart_from(const StagedOutput& out, const Arguments& args) {
+  for (const char* input : {"dataset", "config", "params"})
+    if (args.has(input)) out.require_apart_from(args.get(input), std::string("--") + input);
 }
 
 void require_not_results_of(const Arguments& args, const std::string& marker,

@@ -4,15 +4,21 @@
 
 #include "cli/arguments.hpp"
 #include "jpcr/io/frame_source.hpp"
+#include "jpcr/io/staged_output.hpp"
 #include "jpcr/quadric/quadric_params.hpp"
 
 namespace jpcr::cli {
 
 /// Throws InputError when --out is the --dataset directory itself (writing there would replace
-/// the dataset's own curvature/ ground truth), or when `pattern` cannot be scaled to the
-/// dataset's width (named with the --params file, or "the built-in parameters").
+/// the dataset's own curvature/ ground truth), or when the quadric pattern cannot be scaled to
+/// the dataset's width or then has fewer samples than min_samples (named with the --params
+/// file, or "the built-in parameters").
 void check_dataset_run(const Arguments& args, const FrameSource& dataset,
-                       const PatternParams& pattern);
+                       const QuadricParams& quadric);
+
+/// Throws InputError when --dataset, --config or --params lies in one of the entries of OUT
+/// that `out` replaces (StagedOutput::require_apart_from).
+void require_inputs_apart_from(const StagedOutput& out, const Arguments& args);
 
 /// Throws InputError when --out holds another program's results, told by its `marker` file
 /// (jpcr_curvature's summary.json, jpcr_run's report.json): the two share curvature/, so writing

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <iostream>
 
 #include "cli/arguments.hpp"
 
@@ -54,6 +55,9 @@ FrameRange parse_frame_range(const std::string& text, std::size_t size) {
     r.first = number(text.substr(0, colon), 0);
     r.last = number(text.substr(colon + 1), size);
   }
+  if (r.last > size && r.first < size)
+    std::cerr << "warning: --frames " << text << ": the dataset has " << size << " frames; running "
+              << r.first << ":" << size << '\n';
   r.last = std::min(r.last, size);
   if (r.first >= r.last)
     throw UsageError("--frames '" + text + "' selects no frame of the " + std::to_string(size) +

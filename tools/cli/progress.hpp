@@ -29,7 +29,9 @@ class Progress {
 };
 
 /// "a:b" (half-open, either side may be empty), "a" (one frame) or "" (all) → [first, last).
-/// Throws UsageError naming the text when it is malformed or empty after clamping to `size`.
+/// Throws UsageError naming the text when it is malformed or empty after clamping to `size`;
+/// a LAST beyond `size` is clamped with a warning on stderr (a script's "0:300" on a shorter
+/// dataset runs what there is, and says so).
 struct FrameRange {
   std::size_t first = 0, last = 0;
 };

@@ -130,10 +130,11 @@ int run(int argc, char** argv) {
         open_dataset(args.get("dataset"), camera, params.dataset);
     const cli::FrameRange range =
         cli::parse_frame_range(args.has("frames") ? args.get("frames") : "", dataset->size());
-    cli::check_dataset_run(args, *dataset, params.quadric.pattern);
+    cli::check_dataset_run(args, *dataset, params.quadric);
     cli::require_not_results_of(args, "report.json", "jpcr_run");
     // Written into a staging directory and moved into OUT at the end (io/staged_output.hpp).
     StagedOutput out(args.get("out"), {"curvature", "curvature_png", "ply", "summary.json"});
+    cli::require_inputs_apart_from(out, args);
     const CurvatureWriter writer(out.directory(), args.get_flag("ply"), colors);
     std::cerr << "jpcr_curvature: " << dataset->description() << ", " << estimator->name()
               << ", frames " << range.first << ":" << range.last << '\n';

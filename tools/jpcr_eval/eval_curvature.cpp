@@ -97,9 +97,11 @@ int run_curvature(int argc, char** argv) {
     if (!args.parse(argc, argv)) return 0;
     const std::string support = args.get("support");
     if (support != "pattern") support_radius(support, 0);  // a bad value fails before any read
-    if (args.has("out"))
+    if (args.has("out")) {
       for (const char* input : {"gt", "est"})
         require_output_file_apart_from(args.get("out"), args.get(input), std::string("--") + input);
+      require_not_dataset_or_results_file(args.get("out"));
+    }
     const std::set<std::string> gt = curvature_stamps(args.get("gt"));
     const std::set<std::string> est = curvature_stamps(args.get("est"));
     std::optional<CurvatureErrorAccumulator> acc;

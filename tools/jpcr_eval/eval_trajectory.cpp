@@ -166,11 +166,13 @@ int run_trajectory(int argc, char** argv) {
     const double max_difference = args.get_double("max-difference");
     if (!(max_difference > 0.0) || !std::isfinite(max_difference))
       throw cli::UsageError("--max-difference must be a positive number of seconds");
-    if (args.has("out"))
+    if (args.has("out")) {
       for (const char* input : {"gt", "est", "baseline"})
         if (args.has(input))
           require_output_file_apart_from(args.get("out"), args.get(input),
                                          std::string("--") + input);
+      require_not_dataset_or_results_file(args.get("out"));
+    }
     const Trajectory gt = read_trajectory(args.get("gt"));
     const Trajectory est = read_trajectory(args.get("est"));
     if (gt.empty()) throw InputError(args.get("gt") + ": no poses");

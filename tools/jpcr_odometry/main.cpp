@@ -4,8 +4,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <map>
@@ -152,7 +154,8 @@ int run(int argc, char** argv) {
     }
     if (args.has("threads")) {
       fp.threads = args.get_int("threads");
-      if (fp.threads < 0) throw cli::UsageError("--threads must be >= 0");
+      if (fp.threads < 0 || fp.threads > 256)
+        throw cli::UsageError("--threads must be in 0..256 (0: one per core)");
     }
     const int limit = args.get_int("frames");
     if (limit < 0) throw cli::UsageError("--frames must be >= 0");
@@ -166,7 +169,9 @@ int run(int argc, char** argv) {
       for (const char* input : {"config", "params"})
         if (args.has(input))
           require_output_file_apart_from(file, args.get(input), std::string("--") + input);
-      if (std::filesystem::is_directory(file))
+      require_not_dataset_or_results_file(file);
+      const std::filesystem::path name = std::filesystem::path(file).filename();
+      if (std::filesystem::is_directory(file) || name.empty() || name == "." || name == "..")
         throw InputError(file + ": is a directory, not a file to write");
       // The nearest existing parent must be a directory, or no run could write there.
       for (std::filesystem::path p = std::filesystem::path(file).parent_path(); !p.empty();
@@ -185,6 +190,9 @@ int run(int argc, char** argv) {
     const std::string dataset = args.get("dataset");
     const std::unique_ptr<FrameSource> source = open_dataset(dataset, camera, params.dataset);
     std::size_t frames = source->size();
+    if (limit > 0 && static_cast<std::size_t>(limit) > frames)
+      std::cerr << "warning: --frames " << limit << ": the dataset has " << frames
+                << " frames; running them all\n";
     if (limit > 0) frames = std::min<std::size_t>(frames, limit);
     if (frames == 0) throw InputError(dataset + ": no frames");
 
@@ -221,23 +229,36 @@ int run(int argc, char** argv) {
     run.keyframes = tracker.keyframe_indices();
     // Missing parent directories are made only now, so a run that fails creates nothing.
     make_parents({out, summary});
-    // Both files or neither: the trajectory waits beside OUT until the summary is written.
-    const std::string staged = out + ".partial-" + std::to_string(::getpid());
-    write_trajectory(staged, trajectory, "jpcr_odometry " + run.mode + " on " + dataset);
-    try {
-      write_file_atomically(summary, [&](std::ostream& s) { write_summary(s, run); });
-    } catch (...) {
+    // Both files or neither: each is written beside its target first, then both are renamed;
+    // the trajectory first, so that a failure there leaves both targets as they were.
+    const std::string pid = std::to_string(::getpid());
+    const std::string staged = out + ".partial-" + pid,
+                      staged_summary = summary + ".partial-" + pid;
+    const auto discard = [&] {
       std::remove(staged.c_str());
+      std::remove(staged_summary.c_str());
+    };
+    try {
+      write_trajectory(staged, trajectory, "jpcr_odometry " + run.mode + " on " + dataset);
+      write_file_atomically(staged_summary, [&](std::ostream& s) { write_summary(s, run); });
+    } catch (...) {
+      discard();
       throw;
     }
-    if (std::rename(staged.c_str(), out.c_str()) != 0) {
-      std::remove(staged.c_str());
-      throw InputError(out + ": cannot be moved into place");
-    }
+    for (const auto& [from, to] : {std::pair{staged, out}, std::pair{staged_summary, summary}})
+      if (std::rename(from.c_str(), to.c_str()) != 0) {
+        const std::string why = std::strerror(errno);
+        discard();
+        throw InputError(to + ": cannot be moved into place (" + why + ")");
+      }
     std::cout << "wrote " << trajectory.size() << " poses to " << out << " and the summary to "
               << summary << " (" << run.keyframes.size() << " keyframes, " << failed
               << " frames kept the last motion, " << 1e3 * run.seconds / static_cast<double>(frames)
               << " ms/frame)\n";
+    if (failed > 0)
+      std::cerr << "warning: " << failed << " of " << frames
+                << " frames kept the last motion (their alignment failed): their poses are not "
+                   "trusted\n";
     return 0;
   });
 }

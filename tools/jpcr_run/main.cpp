@@ -115,13 +115,14 @@ int run_main(int argc, char** argv) {
     const KeyframePipeline* self = nullptr;
     const RefinerFactory refiners =
         device_refiner_factory(cli::device_from(args, params), std::cerr);
-    cli::check_dataset_run(args, *dataset, pipeline.joint.quadric.pattern);
+    cli::check_dataset_run(args, *dataset, pipeline.joint.quadric);
     cli::require_not_results_of(args, "summary.json", "jpcr_curvature");
     // Everything is written into a staging directory and moved into OUT at the end: a run that
     // fails leaves OUT as it was, and a run into an earlier run's OUT replaces all its outputs.
     StagedOutput out(args.get("out"),
                      {"trajectory.txt", "verdicts.txt", "front_end.txt", "keyframes.txt",
                       "report.json", "curvature", "curvature_png", "ply"});
+    cli::require_inputs_apart_from(out, args);
     const CurvatureWriter writer(out.directory(), args.get_flag("ply"));
     KeyframePipeline runner(
         pipeline,
