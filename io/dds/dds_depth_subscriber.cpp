@@ -26,6 +26,7 @@ struct ReceivedImage {
 // A camera_info as taken from Cyclone, or the problem that rejects it.
 struct ReceivedCamera {
   std::optional<CameraIntrinsics> camera;
+  std::string frame_id;
   std::string problem;
 };
 
@@ -95,6 +96,7 @@ struct DdsDepthSubscriber::State {
     take_samples<RosCameraInfoMsg>(reader, [&](const RosCameraInfoMsg& m) {
       ReceivedCamera r;
       try {
+        if (m.header.frame_id != nullptr) r.frame_id = m.header.frame_id;
         r.camera = decode_camera_info(camera_info_of(m), s.limits);
       } catch (const std::exception& e) {
         r.problem = e.what();
@@ -198,6 +200,18 @@ void DdsDepthSubscriber::reject(const std::string& topic, const std::string& pro
           << std::endl;
 }
 
+bool DdsDepthSubscriber::of_this_camera(const std::string& frame_id) {
+  if (frame_id.empty() || frame_id == camera_frame_id_) return true;
+  if (!camera_frame_id_.empty()) return false;
+  camera_frame_id_ = frame_id;  // the first sample that names its frame fixes the stream's
+  return true;
+}
+
+std::string DdsDepthSubscriber::other_camera(const std::string& frame_id) const {
+  return "header.frame_id '" + frame_id + "' is not the stream's '" + camera_frame_id_ +
+         "' (a second camera on the topic?)";
+}
+
 // Decodes what the listeners queued (camera_info first, as a camera driver publishes it first),
 // outside the lock so that Cyclone's receive thread never waits for a decode.
 void DdsDepthSubscriber::process() {
@@ -210,7 +224,9 @@ void DdsDepthSubscriber::process() {
     cameras.swap(s.cameras);
   }
   for (const ReceivedCamera& c : cameras) {
-    if (c.camera) {
+    if (c.camera && !of_this_camera(c.frame_id)) {
+      reject(config_.camera_info_topic, other_camera(c.frame_id));
+    } else if (c.camera) {
       s.camera = c.camera;
       if (c.camera->has_distortion() && !distortion_logged_) {
         distortion_logged_ = true;
@@ -244,6 +260,10 @@ void DdsDepthSubscriber::process() {
   for (const ReceivedImage& r : images) {
     if (!r.problem.empty()) {
       reject(config_.depth_topic, r.problem);
+      continue;
+    }
+    if (!of_this_camera(r.frame_id)) {
+      reject(config_.depth_topic, other_camera(r.frame_id));
       continue;
     }
     try {

@@ -42,7 +42,9 @@ class DdsDepthSubscriber {
   DdsDepthSubscriber& operator=(const DdsDepthSubscriber&) = delete;
 
   /// The next valid depth frame, waiting up to `timeout`; nullopt on timeout. A depth image that
-  /// arrives before any camera_info waits (in the queue) for one.
+  /// arrives before any camera_info waits (in the queue) for one. The first sample that names
+  /// its header.frame_id fixes the stream's camera: a depth image or camera_info naming another
+  /// is rejected, as a malformed one is.
   std::optional<Frame> wait_frame(std::chrono::milliseconds timeout);
 
   /// header.frame_id of the depth image of the frame wait_frame returned last ("" before one).
@@ -60,6 +62,10 @@ class DdsDepthSubscriber {
   struct State;
   void process();
   void reject(const std::string& topic, const std::string& problem);
+  // One camera per stream: a depth image or camera_info naming another frame than the first
+  // named one is rejected (an empty frame_id names none).
+  bool of_this_camera(const std::string& frame_id);
+  std::string other_camera(const std::string& frame_id) const;
   void log_incompatible(const std::string& topic, std::atomic<int>& policy);
 
   DdsConfig config_;
@@ -67,6 +73,7 @@ class DdsDepthSubscriber {
   std::unique_ptr<State> state_;
   std::size_t frames_ = 0;
   std::string frame_id_;
+  std::string camera_frame_id_;  // the stream's frame: the first one a sample named
   std::size_t rejected_ = 0;
   std::size_t dropped_seen_ = 0;         // the drops process() has looked at
   std::size_t dropped_logged_ = 0;       // ... and those a log line counted

@@ -74,8 +74,11 @@ bool DdsKeyframeWriter::wait_for_back_ends(bool present, const KeepWaiting& keep
       keep_waiting);
 }
 
-bool DdsKeyframeWriter::wait_matched(std::chrono::milliseconds timeout) const {
-  return wait_for_back_ends(true, [&](double waited) { return waited * 1000.0 < timeout.count(); });
+bool DdsKeyframeWriter::wait_matched(std::chrono::milliseconds timeout,
+                                     const KeepWaiting& keep_waiting) const {
+  return wait_for_back_ends(true, [&](double waited) {
+    return waited * 1000.0 < timeout.count() && (!keep_waiting || keep_waiting(waited));
+  });
 }
 
 bool DdsKeyframeWriter::wait_until_unmatched(const KeepWaiting& keep_waiting) const {

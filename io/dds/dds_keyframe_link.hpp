@@ -77,8 +77,9 @@ class DdsKeyframeWriter {
   /// jpcr back ends matched: readers whose USER_DATA is kBackEndUserData, so that another
   /// reader of the topic (jpcr_dds_echo, a recorder) neither starts nor holds up the stream.
   int matched() const;
-  /// Waits until a back end is matched; false on timeout.
-  bool wait_matched(std::chrono::milliseconds timeout) const;
+  /// Waits until a back end is matched; false on timeout, or once `keep_waiting` (when given)
+  /// says false (a stop request).
+  bool wait_matched(std::chrono::milliseconds timeout, const KeepWaiting& keep_waiting = {}) const;
   /// Waits until the back ends acknowledged every keyframe (before exiting): a back end
   /// acknowledges a keyframe once its queue has room for it, so this waits as publish does.
   bool flush(const KeepWaiting& keep_waiting) const;

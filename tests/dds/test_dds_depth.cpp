@@ -173,9 +173,14 @@ TEST_F(DdsDepth, MalformedSamplesAreRejectedAndReceptionGoesOn) {
   });
   send_bad([](RosImage& m, RosImageBuffer&) { m.is_bigendian = 1; });
   send_bad([](RosImage& m, RosImageBuffer&) { m.step = 10; });
+  {  // a well-formed image of another camera
+    RosImageBuffer b = depth;
+    images.write(image_message(b, 1.0, "other_cam"));
+  }
   RosCameraInfo bad_info = info;
   bad_info.p[0] = 0.0;
   infos.write(camera_info_message(bad_info, 1.0, frame_id));
+  infos.write(camera_info_message(info, 1.0, "other_cam"));
   const Frame next = test_frame(2.0);
   const RosImageBuffer next_depth = encode_depth_image(next.depth, DepthEncoding::kMillimetres16);
   images.write(image_message(next_depth, 2.0, frame_id));
@@ -183,18 +188,20 @@ TEST_F(DdsDepth, MalformedSamplesAreRejectedAndReceptionGoesOn) {
   const std::optional<Frame> got = subscriber.wait_frame(kTimeout);
   ASSERT_TRUE(got);
   expect_same_frame(*got, next, 1000.0);
-  EXPECT_EQ(subscriber.samples_rejected(), 7u) << log.str();
+  EXPECT_EQ(subscriber.samples_rejected(), 9u) << log.str();
   EXPECT_EQ(subscriber.frames_received(), 1u);
   const std::string text = log.str();
   // One line per rejected sample, and one (once) that the camera's lens distortion is not applied.
-  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 8) << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 10) << text;
   for (const char* expected :
        {"camera_info: the camera has lens distortion, which is not applied",
         "image_raw: rejected sample: data is 153598 bytes, step x height = 153600",
         "image_raw: rejected sample: unknown encoding 'yuv422'", "zero size 0x0",
         "claimed size step x height = 100000000 bytes exceeds the limit of 67108864",
         "big-endian data is not supported", "step 10 < width x 2 bytes = 640",
-        "camera_info: rejected sample: camera_info P focal lengths fx = 0.000000"}) {
+        "camera_info: rejected sample: camera_info P focal lengths fx = 0.000000",
+        "image_raw: rejected sample: header.frame_id 'other_cam' is not the stream's 'cam'",
+        "camera_info: rejected sample: header.frame_id 'other_cam' is not the stream's 'cam'"}) {
     EXPECT_NE(text.find(expected), std::string::npos) << expected << "\nin:\n" << text;
   }
 }

@@ -119,7 +119,8 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
         if (!keyframe) {
           tracked.push_back(f.front_end);
         } else {
-          if (sent == 0 && !keyframes.wait_matched(o.backend_wait))
+          if (sent == 0 && !keyframes.wait_matched(o.backend_wait,
+                                                   [](double) { return !cli::stop_requested(); }))
             std::cerr << "jpcr_node: no back end on " << keyframe_topic_name(o.dds)
                       << "; sending the keyframes anyway\n";
           waiting = false;
