@@ -158,6 +158,7 @@ Frame TumDataset::load(std::size_t index) const {
     cv::remap(raw, undistorted, undistortion_->map_x, undistortion_->map_y, cv::INTER_NEAREST,
               cv::BORDER_CONSTANT, cv::Scalar(0));
     undistorted.copyTo(raw);
+    frame.camera.distortion = {};  // the depth as delivered is rectified (same K)
   }
   if (options_.load_color && color_[index]) {
     frame.color = load_color_image((fs::path(directory_) / *color_[index]).string());

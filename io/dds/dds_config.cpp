@@ -1,6 +1,8 @@
 #include "jpcr/io/dds/dds_config.hpp"
 
 #include <cmath>
+#include <string>
+#include <utility>
 
 #include "jpcr/io/yaml_reader.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -40,13 +42,44 @@ void DdsConfig::validate() const {
   if (depth_topic.back() == '/' || camera_info_topic.back() == '/')
     throw InputError(std::string(depth_topic.back() == '/' ? "depth_topic" : "camera_info_topic") +
                      ": must not end with '/'");
-  if (history_depth < 1) throw InputError("history_depth: must be at least 1");
-  if (image_history_depth < 1) throw InputError("image_history_depth: must be at least 1");
-  if (keyframe_queue < 1) throw InputError("keyframe_queue: must be at least 1");
-  if (!(max_image_megabytes > 0.0) || max_image_megabytes > 4096.0) {
-    throw InputError("max_image_megabytes: must be in (0, 4096] MiB");
+  // ROS 2 sees the DDS topic rt/x as its topic /x: any other name matches no ROS node, silently.
+  for (const auto& [field, name] :
+       {std::pair<const char*, const std::string&>{"topic_prefix", topic_prefix},
+        {"depth_topic", depth_topic},
+        {"camera_info_topic", camera_info_topic}})
+    if (name.rfind("rt/", 0) != 0)
+      throw InputError(std::string(field) + ": '" + name +
+                       "' does not start with 'rt/', so no ROS 2 node sees it (ROS's /x is rt/x)");
+  if (topic_prefix.back() != '/')
+    throw InputError("topic_prefix: '" + topic_prefix + "' must end with '/' (the topics are " +
+                     topic_prefix + "odom, ...)");
+  if (depth_topic == camera_info_topic)
+    throw InputError("depth_topic: '" + depth_topic + "' is also camera_info_topic");
+  for (const char* output :
+       {"odom", "keyframe_pose", "path", "curvature", "curvature_color", "keyframe"})
+    for (const auto& [field, name] :
+         {std::pair<const char*, const std::string&>{"depth_topic", depth_topic},
+          {"camera_info_topic", camera_info_topic}})
+      if (name == topic_prefix + output)
+        throw InputError(std::string(field) + ": '" + name + "' is one of jpcr's own topics");
+  for (const auto& [field, id] :
+       {std::pair<const char*, const std::string&>{"world_frame_id", world_frame_id},
+        {"camera_frame_id", camera_frame_id}})
+    if (id.empty() || id.front() == '/')
+      throw InputError(std::string(field) + ": '" + id +
+                       "' must be a tf2 frame id: not empty, without a leading '/'");
+  if (history_depth < 1 || history_depth > 100000)
+    throw InputError("history_depth: must be in 1..100000");
+  // Each kept image may be max_image_megabytes large.
+  if (image_history_depth < 1 || image_history_depth > 1000)
+    throw InputError("image_history_depth: must be in 1..1000");
+  if (keyframe_queue < 1 || keyframe_queue > 1000)
+    throw InputError("keyframe_queue: must be in 1..1000");
+  if (!(max_image_megabytes > 0.0) || max_image_megabytes > 4096.0 || max_image_bytes() < 1024) {
+    throw InputError("max_image_megabytes: must be in [1/1024, 4096] MiB");
   }
-  if (max_image_side < 1) throw InputError("max_image_side: must be at least 1");
+  if (max_image_side < 1 || max_image_side > 16384)
+    throw InputError("max_image_side: must be in 1..16384 (a camera's largest side)");
 }
 
 std::size_t DdsConfig::max_image_bytes() const {

@@ -1,5 +1,8 @@
 #include "jpcr/io/dds/dds_result_publisher.hpp"
 
+#include <iostream>
+
+#include "jpcr/io/dds/dds_endpoint.hpp"
 #include "jpcr/io/dds/ros_messages.hpp"
 
 namespace jpcr {
@@ -55,33 +58,49 @@ DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic) {
   }
 }
 
-DdsResultPublisher::DdsResultPublisher(const DdsParticipant& participant, const DdsConfig& config)
-    : config_(config), writers_(std::make_unique<Writers>(participant, config)) {}
+DdsResultPublisher::DdsResultPublisher(const DdsParticipant& participant, const DdsConfig& config,
+                                       std::ostream* log)
+    : config_(config),
+      log_(log ? log : &std::cerr),
+      writers_(std::make_unique<Writers>(participant, config)) {}
 
 DdsResultPublisher::~DdsResultPublisher() = default;
 
+template <typename Writer, typename Msg>
+void DdsResultPublisher::write(const Writer& writer, const Msg& sample) {
+  try {
+    writer.write(sample);
+  } catch (const DdsError& e) {
+    ++writes_failed_;
+    std::size_t left_out = 0;
+    if (failure_lines_.allow(left_out))
+      *log_ << "jpcr dds: not published (" << writes_failed_ << " in all): " << e.what()
+            << LogBudget::note(left_out) << std::endl;
+  }
+}
+
 void DdsResultPublisher::publish_odometry(const StampedPose& pose, const Matrix6d& covariance) {
-  writers_->odometry.write(
-      odometry_message(pose, covariance, config_.world_frame_id, config_.camera_frame_id));
+  write(writers_->odometry,
+        odometry_message(pose, covariance, config_.world_frame_id, config_.camera_frame_id));
 }
 
 void DdsResultPublisher::publish_keyframe(const StampedPose& pose,
                                           const Image<Eigen::Vector2f>& curvature,
                                           const ColorImage& color) {
-  writers_->keyframe_pose.write(pose_stamped_message(pose, config_.world_frame_id));
+  write(writers_->keyframe_pose, pose_stamped_message(pose, config_.world_frame_id));
   if (!curvature.empty()) {
     const RosImageBuffer k = encode_curvature_image(curvature);
-    writers_->curvature.write(image_message(k, pose.timestamp, config_.camera_frame_id));
+    write(writers_->curvature, image_message(k, pose.timestamp, config_.camera_frame_id));
   }
   if (!color.empty()) {
     const RosImageBuffer c = encode_rgb8_image(color);
-    writers_->curvature_color.write(image_message(c, pose.timestamp, config_.camera_frame_id));
+    write(writers_->curvature_color, image_message(c, pose.timestamp, config_.camera_frame_id));
   }
 }
 
 void DdsResultPublisher::publish_path(const Trajectory& trajectory) {
   const PathMessage path(trajectory, config_.world_frame_id);
-  writers_->path.write(path.message());
+  write(writers_->path, path.message());
 }
 
 void DdsResultPublisher::set_camera_frame_id(const std::string& id) {

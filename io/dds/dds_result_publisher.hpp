@@ -13,13 +13,16 @@
 #pragma once
 
 #include <chrono>
+#include <cstddef>
 #include <memory>
+#include <ostream>
 #include <string>
 
 #include <Eigen/Core>
 
 #include "jpcr/io/dds/dds_config.hpp"
 #include "jpcr/io/dds/dds_participant.hpp"
+#include "jpcr/io/log_budget.hpp"
 #include "jpcr/quadric/frame.hpp"
 #include "jpcr/quadric/image.hpp"
 #include "jpcr/quadric/se3.hpp"
@@ -37,8 +40,12 @@ DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic);
 
 class DdsResultPublisher {
  public:
-  /// Creates the five writers; throws DdsError when Cyclone refuses.
-  DdsResultPublisher(const DdsParticipant& participant, const DdsConfig& config);
+  /// Creates the five writers; throws DdsError when Cyclone refuses. A sample Cyclone refuses
+  /// later (larger than its MaxSampleSize, out of resources) is not published: it is counted
+  /// (writes_failed) and logged to `log` (default std::cerr; the first 10 lines, then one per
+  /// 10 s), and publishing goes on: one lost result does not stop the run that makes them.
+  DdsResultPublisher(const DdsParticipant& participant, const DdsConfig& config,
+                     std::ostream* log = nullptr);
   ~DdsResultPublisher();
   DdsResultPublisher(const DdsResultPublisher&) = delete;
   DdsResultPublisher& operator=(const DdsResultPublisher&) = delete;
@@ -62,11 +69,19 @@ class DdsResultPublisher {
 
   /// Readers matched on `topic` (for logs and for waiting in tests).
   int matched(ResultTopic topic) const;
+  /// Samples Cyclone refused to publish, over all topics.
+  std::size_t writes_failed() const { return writes_failed_; }
 
  private:
   struct Writers;
+  template <typename Writer, typename Msg>
+  void write(const Writer& writer, const Msg& sample);
+
   DdsConfig config_;
+  std::ostream* log_;
   std::unique_ptr<Writers> writers_;
+  std::size_t writes_failed_ = 0;
+  LogBudget failure_lines_;
 };
 
 }  // namespace jpcr

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <limits>
 #include <list>
@@ -122,6 +123,18 @@ RosStamp to_ros_stamp(double seconds) {
   return s;
 }
 
+std::string format_ros_stamp(std::int64_t sec, std::uint32_t nanosec) {
+  constexpr std::int64_t kPerSecond = 1000000000;
+  const std::int64_t total = sec * kPerSecond + nanosec;  // |sec| < 2^33: no overflow
+  const std::uint64_t magnitude =
+      total < 0 ? static_cast<std::uint64_t>(-total) : static_cast<std::uint64_t>(total);
+  char text[40];
+  std::snprintf(text, sizeof text, "%s%llu.%09llu", total < 0 ? "-" : "",
+                static_cast<unsigned long long>(magnitude / kPerSecond),
+                static_cast<unsigned long long>(magnitude % kPerSecond));
+  return text;
+}
+
 double to_seconds(const RosStamp& stamp) {
   const double seconds =
       static_cast<double>(stamp.sec) + static_cast<double>(stamp.nanosec) / kNanosecondsPerSecond;
@@ -230,6 +243,11 @@ CameraIntrinsics decode_camera_info(const RosCameraInfo& info, const RosImageLim
        has_p ? std::vector<double>(p.begin(), p.end()) : std::vector<double>(k.begin(), k.end())) {
     if (!std::isfinite(v)) reject("camera_info " + name + " is not finite");
   }
+  // K and R are not used beside P, but a sample with NaN in them is malformed all the same.
+  for (const double v : info.k)
+    if (!std::isfinite(v)) reject("camera_info K is not finite");
+  for (const double v : info.r)
+    if (!std::isfinite(v)) reject("camera_info R is not finite");
   if (!(k[0] > 0.0) || !(k[4] > 0.0)) {
     reject("camera_info " + name + " focal lengths fx = " + std::to_string(k[0]) +
            ", fy = " + std::to_string(k[4]) + " must be positive");

@@ -35,6 +35,9 @@ struct RosStamp {
 RosStamp to_ros_stamp(double seconds);
 /// sec + nanosec in seconds; remembered for to_ros_stamp.
 double to_seconds(const RosStamp& stamp);
+/// The stamp as exact decimal seconds: "12.000000500", and "-0.466667000" for {-1, 533333000}
+/// (sec + nanosec·1e-9; "%d.%09u" would print -1.533333000). nanosec ≥ 1e9 is normalised.
+std::string format_ros_stamp(std::int64_t sec, std::uint32_t nanosec);
 constexpr std::size_t kRememberedStamps = std::size_t{1} << 16;  // 36 min of frames at 30 Hz
 
 /// The fields of a received sensor_msgs/Image; `data` is borrowed.

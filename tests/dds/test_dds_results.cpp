@@ -326,6 +326,35 @@ TEST_F(DdsResults, KeyframePublishWaitsWhileTheBackEndsQueueIsFull) {
   EXPECT_FALSE(reader.wait(milliseconds(200)));  // nothing twice
 }
 
+// A sample Cyclone refuses (a 320x240 32FC2 map, 614 kB, above a MaxSampleSize of 300 kB) is
+// counted and logged, and publishing goes on: jpcr_node exited mid-run on the first one.
+TEST(DdsResultPublisher, ARefusedSampleIsCountedAndPublishingGoesOn) {
+  DdsConfig config = test::loopback_dds_config("refused");
+  config.domain_id = 201 + static_cast<int>(::getpid() % 30);  // a domain of its own settings
+  config.cyclone_uri =
+      "<CycloneDDS><Domain><General><Interfaces><NetworkInterface name=\"lo\"/></Interfaces>"
+      "<AllowMulticast>false</AllowMulticast></General><Discovery><Peers><Peer "
+      "address=\"127.0.0.1\"/></Peers></Discovery><Internal><MaxSampleSize>300kB</MaxSampleSize>"
+      "</Internal></Domain></CycloneDDS>";
+  DdsParticipant side{config};
+  std::ostringstream log;
+  DdsResultPublisher publisher(side, config, &log);
+  DdsReader<RosOdometry> odometry(side, result_topic_name(config, ResultTopic::kOdometry),
+                                  result_topic_qos(config, ResultTopic::kOdometry));
+  DdsReader<RosImage> curvature(side, result_topic_name(config, ResultTopic::kCurvature),
+                                result_topic_qos(config, ResultTopic::kCurvature));
+  ASSERT_TRUE(test::eventually([&] { return publisher.matched(ResultTopic::kCurvature) > 0; }));
+  const Image<Eigen::Vector2f> k(320, 240, Eigen::Vector2f(1.0f, -1.0f));
+  EXPECT_NO_THROW(publisher.publish_keyframe(some_pose(1.0), k, ColorImage()));
+  EXPECT_EQ(publisher.writes_failed(), 1u) << log.str();
+  EXPECT_NE(log.str().find("curvature"), std::string::npos) << log.str();
+  publisher.publish_odometry(some_pose(2.0), Matrix6d::Identity());
+  EXPECT_EQ(publisher.writes_failed(), 1u);
+  const auto got = take_one(odometry, [](const RosOdometry& m) { return stamp_of(m.header); });
+  ASSERT_TRUE(got);
+  EXPECT_EQ(got->sec, 2);
+}
+
 TEST(DdsParticipant, BadDomainIdIsAnError) {
   EXPECT_THROW(DdsParticipant(233), DdsError);
   EXPECT_THROW(DdsParticipant(-1), DdsError);

@@ -45,6 +45,16 @@ TEST(RosStamp, RoundTripsToTheNanosecond) {
   EXPECT_EQ(to_ros_stamp(1.5).nanosec, 500000000u);
 }
 
+// sec + nanosec·1e-9 in decimal: a negative sec with nanosec > 0 is above sec.
+TEST(RosStamp, IsFormattedAsItsValue) {
+  EXPECT_EQ(format_ros_stamp(12, 500), "12.000000500");
+  EXPECT_EQ(format_ros_stamp(-1, 533333000), "-0.466667000");
+  EXPECT_EQ(format_ros_stamp(-2, 0), "-2.000000000");
+  EXPECT_EQ(format_ros_stamp(0, 0), "0.000000000");
+  EXPECT_EQ(format_ros_stamp(5, 1500000000u), "6.500000000");
+  EXPECT_EQ(format_ros_stamp(1733400000, 999999999), "1733400000.999999999");
+}
+
 // A double resolves today's stamps (1.7e9 s) only to 238 ns: a received stamp must still come
 // back to the nanosecond, or ROS's exact-time sync and tf lookups miss what jpcr publishes.
 TEST(RosStamp, AReceivedStampComesBackExactly) {
@@ -250,6 +260,9 @@ TEST(RosCameraInfo, TheIntrinsicsComeFromPAndFromKWithoutP) {
     return input_error_of([&] { decode_camera_info(i, {}); });
   };
   EXPECT_EQ(error([](RosCameraInfo& i) { i.k[1] = 0.5; }), "<no error>");  // P is read, not K
+  // ... but a K or R with NaN is a malformed sample all the same.
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.k[0] = std::nan(""); }), "camera_info K is not finite");
+  EXPECT_EQ(error([](RosCameraInfo& i) { i.r[4] = INFINITY; }), "camera_info R is not finite");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.p[0] = 0.0; }),
             "camera_info P focal lengths fx = 0.000000, fy = 301.500000 must be positive");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.p[7] = std::nan(""); }), "camera_info P is not finite");
@@ -355,7 +368,7 @@ TEST(DdsConfig, YamlSectionMapsOntoTheStruct) {
             "p.yaml:2: key 'dds.domain_id': must be in 0..232");
   EXPECT_EQ(parse_params("dds:\n  keyframe_queue: 3\n", "p.yaml").dds.keyframe_queue, 3);
   EXPECT_EQ(input_error_of([] { parse_params("dds:\n  keyframe_queue: 0\n", "p.yaml"); }),
-            "p.yaml:2: key 'dds.keyframe_queue': must be at least 1");
+            "p.yaml:2: key 'dds.keyframe_queue': must be in 1..1000");
   EXPECT_EQ(input_error_of([] {
               parse_params("dds:\n  domian_id: 3\n", "p.yaml");
             }).find("domian_id") != std::string::npos,
@@ -373,6 +386,30 @@ TEST(DdsConfig, YamlSectionMapsOntoTheStruct) {
       "digits, '_' and '/'");
   EXPECT_EQ(input_error_of([] { parse_params("dds:\n  camera_info_topic: rt/c/\n", "p.yaml"); }),
             "p.yaml:2: key 'dds.camera_info_topic': must not end with '/'");
+  // Settings that would silently match nothing, or the node's own output.
+  const auto dds_error = [](const std::string& yaml) {
+    return input_error_of([&] { parse_params("dds:\n" + yaml, "p.yaml"); });
+  };
+  EXPECT_EQ(dds_error("  depth_topic: camera/depth/image_rect_raw\n"),
+            "p.yaml:2: key 'dds.depth_topic': 'camera/depth/image_rect_raw' does not start with "
+            "'rt/', so no ROS 2 node sees it (ROS's /x is rt/x)");
+  EXPECT_EQ(dds_error("  topic_prefix: rt/jpcr\n"),
+            "p.yaml:2: key 'dds.topic_prefix': 'rt/jpcr' must end with '/' (the topics are "
+            "rt/jpcrodom, ...)");
+  EXPECT_EQ(dds_error("  depth_topic: rt/camera/depth/camera_info\n"),
+            "p.yaml:2: key 'dds.depth_topic': 'rt/camera/depth/camera_info' is also "
+            "camera_info_topic");
+  EXPECT_EQ(dds_error("  depth_topic: rt/jpcr/curvature\n"),
+            "p.yaml:2: key 'dds.depth_topic': 'rt/jpcr/curvature' is one of jpcr's own topics");
+  EXPECT_EQ(dds_error("  world_frame_id: /map\n"),
+            "p.yaml:2: key 'dds.world_frame_id': '/map' must be a tf2 frame id: not empty, "
+            "without a leading '/'");
+  EXPECT_EQ(dds_error("  image_history_depth: 2000000000\n"),
+            "p.yaml:2: key 'dds.image_history_depth': must be in 1..1000");
+  EXPECT_EQ(dds_error("  max_image_megabytes: 1e-9\n"),
+            "p.yaml:2: key 'dds.max_image_megabytes': must be in [1/1024, 4096] MiB");
+  EXPECT_EQ(dds_error("  max_image_side: 20000\n"),
+            "p.yaml:2: key 'dds.max_image_side': must be in 1..16384 (a camera's largest side)");
 }
 
 TEST(DdsConfig, DefaultYamlStatesTheBuiltInDefaults) {

@@ -135,6 +135,11 @@ TEST(TumDataset, DistortionIsRemovedWithNearestNeighbour) {
     if (++checked > 2000) break;
   }
   EXPECT_GT(checked, 1000);
+  // The frame's camera describes the depth as delivered, rectified (what jpcr_dds_play
+  // publishes in camera_info: a D beside rectified depth would be applied twice downstream).
+  ASSERT_TRUE(fr1.has_distortion());
+  EXPECT_FALSE(frame.camera.has_distortion());
+  EXPECT_EQ(frame.camera.fx, fr1.fx);
 }
 
 TEST(TumDataset, DistortionThatLosesTheImageIsRefused) {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "jpcr/io/dds/ros_image.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
@@ -22,7 +23,7 @@ std::string format(const char* fmt, Values... values) {
 }
 
 std::string header(const char* kind, const std_msgs_msg_dds__Header_& h) {
-  return format("%s stamp=%d.%09u", kind, h.stamp.sec, h.stamp.nanosec) +
+  return format("%s stamp=", kind) + format_ros_stamp(h.stamp.sec, h.stamp.nanosec) +
          " frame=" + text(h.frame_id);
 }
 

@@ -120,7 +120,11 @@ int run(int argc, char** argv) {
     }
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
     constexpr std::chrono::milliseconds kFlushTimeout{2000};  // for the last frames to be acked
-    publisher.flush(kFlushTimeout);
+    if (!publisher.flush(kFlushTimeout))
+      std::cerr << "jpcr_dds_play: warning: a subscriber had not acknowledged the last frames "
+                   "after "
+                << kFlushTimeout.count() / 1000.0
+                << " s (a slow or stalled reader); they may not have arrived\n";
     std::cout << "published " << published << " frames in " << seconds << " s ("
               << published / std::max(seconds, 1e-9) << " frames/s) on " << dds.depth_topic
               << (cli::stop_requested() ? ", stopped by signal" : "") << '\n';

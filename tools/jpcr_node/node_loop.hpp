@@ -72,9 +72,7 @@ class StampOrder {
  private:
   static std::string exact(double stamp) {  // as received: sec.nanosec
     const RosStamp s = to_ros_stamp(stamp);
-    char text[32];
-    std::snprintf(text, sizeof text, "%d.%09u", s.sec, s.nanosec);
-    return text;
+    return format_ros_stamp(s.sec, s.nanosec);
   }
 
   bool taken_ = false;
