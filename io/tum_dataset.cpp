@@ -97,6 +97,14 @@ TumDataset::TumDataset(const std::string& directory, const CameraIntrinsics& cam
     }
   }
   if (depth_.empty()) throw InputError(directory + ": the sequence has no depth frames");
+  // Every listed depth image exists: a missing one found only when its frame is reached would
+  // cost the run up to it.
+  for (std::size_t i = 0; i < depth_.size(); ++i)
+    if (!fs::is_regular_file(dir / depth_[i].path, ec))
+      throw InputError((dir / depth_[i].path).string() + ": file does not exist (frame " +
+                       std::to_string(i) + " of the " +
+                       (fs::exists(associations, ec) ? "associations.txt" : "depth.txt") +
+                       " list)");
 
   ground_truth_.assign(depth_.size(), std::nullopt);
   const fs::path gt_path = dir / "groundtruth.txt";

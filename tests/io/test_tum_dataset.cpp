@@ -187,11 +187,19 @@ TEST(TumDataset, UnsortedAndDuplicateTimestamps) {
             std::string::npos);
 }
 
+// Found when the dataset is opened, before any frame is run; a file removed later is still
+// named when its frame is loaded.
 TEST(TumDataset, ListNamingAMissingPng) {
   test::TempDir dir;
   make_sequence(dir, 2);
   fs::remove(dir.file("depth/1.png"));
+  EXPECT_NE(error_of([&] {
+              TumDataset(dir.path(), tiny_camera());
+            }).find("depth/1.png: file does not exist (frame 1 of the depth.txt list)"),
+            std::string::npos);
+  make_sequence(dir, 2);
   const TumDataset dataset(dir.path(), tiny_camera());
+  fs::remove(dir.file("depth/1.png"));
   EXPECT_NO_THROW(dataset.load(0));
   EXPECT_NE(error_of([&] { dataset.load(1); }).find("depth/1.png: file does not exist"),
             std::string::npos);

@@ -47,6 +47,10 @@ expect 1 "seq/depth.txt: is a file of the dataset or results in" -- \
   "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --out "$tmp/seq/depth.txt"
 [ "$(cat "$tmp/run1/report.json")" = "{}" ] && [ ! -s "$tmp/seq/depth.txt" ] ||
   { echo "FAIL: a results or dataset file was overwritten"; fail=1; }
+# Nothing associates: the message names both files.
+printf '100 0 0 0 0 0 0 1\n101 0 0 0 0 0 0 1\n102 0 0 0 0 0 0 1\n' > "$tmp/later.txt"
+expect 1 "later.txt against .*gt30.txt: ATE: only 0 poses associate" -- \
+  "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/later.txt"
 # --out in a directory not made yet: made, as the other tools do.
 expect 0 "translation" -- "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --out "$tmp/new/dir/r.json"
 [ -s "$tmp/new/dir/r.json" ] || { echo "FAIL: --out in a new directory not written"; fail=1; }

@@ -90,6 +90,8 @@ expect 2 "start-offset expects MM,DEG" -- "$eval_bin" noise "${small[@]}" --star
 expect 2 "method expects j-ftf, q-full or icp-ftf" -- "$eval_bin" noise "${small[@]}" --method j-full
 expect 2 "size expects WIDTHxHEIGHT" -- "$eval_bin" noise --size 80by60
 expect 2 "noise-matched needs --noise range:K" -- "$eval_bin" noise --noise kinect --noise-matched
+expect 2 "noise-matched needs --noise range:K with K > 0" -- "$eval_bin" noise --noise range:0 \
+  --noise-matched
 expect 2 "motion must be a finite scale" -- "$eval_bin" noise "${small[@]}" --motion nan
 expect 2 "range:K needs a percentage K ≥ 0" -- "$eval_bin" noise --noise range:-1
 expect 1 "bad.yaml" -- "$eval_bin" noise "${small[@]}" --params "$tmp/bad.yaml"

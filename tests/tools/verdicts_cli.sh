@@ -17,6 +17,8 @@ expect 0 "wrote 5 poses" -- "$run" --dataset "$tmp/plane" --out "$tmp/run"
 # ... and says so at the end, not only in verdicts.txt.
 expect 0 "warning: 4 of 5 frames are not trusted (front end: 4 degenerate)" -- \
   "$run" --dataset "$tmp/plane" --out "$tmp/run"
+# The error table never stands without the count (synthetic ground truth: the table is printed).
+expect 0 "frames trusted: 1 of 5 (verdicts.txt)" -- "$run" --dataset "$tmp/plane" --out "$tmp/run"
 verdicts=$tmp/run/verdicts.txt
 [ -s "$verdicts" ] || { echo "FAIL: verdicts.txt missing"; exit 1; }
 stamps() { grep -v '^#' "$1" | awk '{print $1}'; }

@@ -1,5 +1,6 @@
 #include "cli/arguments.hpp"
 
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -185,6 +186,10 @@ void parse_image_size(const std::string& option, const std::string& text, int& w
 }
 
 int run_program(const std::string& program, const std::function<int()>& body) {
+  // A reader that closes the pipe (jpcr_run ... | head -1) must not kill the run halfway, its
+  // staging directory left behind: writes to the closed pipe fail quietly instead, and the
+  // output files are written whole as ever.
+  std::signal(SIGPIPE, SIG_IGN);
   try {
     return body();
   } catch (const UsageError& e) {

@@ -341,8 +341,8 @@ int run_noise(int argc, char** argv) {
 
     Params params = args.has("params") ? load_params(args.get("params")) : Params{};
     if (args.get_flag("noise-matched")) {
-      if (noise.kind != NoiseKind::kRange)
-        throw cli::UsageError("--noise-matched needs --noise range:K");
+      if (noise.kind != NoiseKind::kRange || !(noise.range_percent > 0.0))
+        throw cli::UsageError("--noise-matched needs --noise range:K with K > 0");
       const float per_range = static_cast<float>(3.0 * noise.range_percent / 100.0);
       params.joint.quadric.fit.fair_n0_per_range = per_range;
       params.joint.quadric.fit.gate_per_range = per_range;

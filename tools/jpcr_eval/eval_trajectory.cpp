@@ -181,7 +181,11 @@ int run_trajectory(int argc, char** argv) {
     TrajectoryReport report;
     report.gt_poses = gt.size();
     report.est_poses = est.size();
-    report.ate = compute_ate(gt, est, max_difference);
+    try {
+      report.ate = compute_ate(gt, est, max_difference);
+    } catch (const InputError& e) {
+      throw InputError(args.get("est") + " against " + args.get("gt") + ": " + e.what());
+    }
     // Finite poses far beyond any scene (1e308 m) overflow the alignment: say so, not "nan".
     if (!std::isfinite(report.ate.translation.rmse) || !std::isfinite(report.ate.translation.max))
       throw InputError(args.get("est") + ": the errors against " + args.get("gt") +

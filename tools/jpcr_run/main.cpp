@@ -205,7 +205,8 @@ int run_main(int argc, char** argv) {
               << '\n';
     if (const std::string warning = run::untrusted_warning(runner); !warning.empty())
       std::cerr << "jpcr_run: warning: " << warning << '\n';
-    if (errors) run::print_error_table(std::cout, to_string(pipeline.method), front_errors, errors);
+    if (errors)
+      run::print_error_table(std::cout, to_string(pipeline.method), front_errors, errors, runner);
     return 0;
   });
 }

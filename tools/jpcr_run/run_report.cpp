@@ -141,12 +141,22 @@ void write_verdicts(std::ostream& out, const KeyframePipeline& p) {
   }
 }
 
-std::string untrusted_warning(const KeyframePipeline& p) {
+namespace {
+
+std::size_t untrusted_frames(const KeyframePipeline& p) {
   std::size_t untrusted = 0;
+  for (std::size_t i = 0; i < p.frames().size(); ++i)
+    untrusted += p.verdicts(i).trusted() ? 0 : 1;
+  return untrusted;
+}
+
+}  // namespace
+
+std::string untrusted_warning(const KeyframePipeline& p) {
+  const std::size_t untrusted = untrusted_frames(p);
   std::map<std::string, int> front_end;  // failures by verdict
   for (std::size_t i = 0; i < p.frames().size(); ++i) {
     const FrameVerdicts v = p.verdicts(i);
-    untrusted += v.trusted() ? 0 : 1;
     if (v.front_end != IcpVerdict::ok) ++front_end[to_string(v.front_end)];
   }
   if (untrusted == 0) return {};
@@ -163,7 +173,8 @@ std::string untrusted_warning(const KeyframePipeline& p) {
 
 void print_error_table(std::ostream& out, const std::string& method,
                        const std::optional<TrajectoryErrors>& front_end,
-                       const std::optional<TrajectoryErrors>& refined) {
+                       const std::optional<TrajectoryErrors>& refined,
+                       const KeyframePipeline& pipeline) {
   char line[256];
   std::snprintf(line, sizeof line, "%-10s %11s %13s %15s %15s %15s\n", "method", "ATE m",
                 "RPE m/frame", "RPE deg/frame", "rel. transl. m", "rel. rot. rad");
@@ -176,6 +187,9 @@ void print_error_table(std::ostream& out, const std::string& method,
   };
   if (front_end) row("icp-ftf", *front_end);
   if (refined && method != "icp-ftf") row(method, *refined);
+  const std::size_t frames = pipeline.frames().size();
+  out << "frames trusted: " << frames - untrusted_frames(pipeline) << " of " << frames
+      << " (verdicts.txt)\n";
 }
 
 }  // namespace jpcr::run

@@ -35,9 +35,11 @@ void write_verdicts(std::ostream& out, const KeyframePipeline& pipeline);
 /// empty when every frame is.
 std::string untrusted_warning(const KeyframePipeline& pipeline);
 
-/// "method  ATE m  RPE m/frame  RPE deg/frame  rel. transl. m  rel. rot. rad" rows.
+/// "method  ATE m  RPE m/frame  RPE deg/frame  rel. transl. m  rel. rot. rad" rows, then
+/// "frames trusted: T of N (verdicts.txt)", so that the numbers never stand without it.
 void print_error_table(std::ostream& out, const std::string& method,
                        const std::optional<TrajectoryErrors>& front_end,
-                       const std::optional<TrajectoryErrors>& refined);
+                       const std::optional<TrajectoryErrors>& refined,
+                       const KeyframePipeline& pipeline);
 
 }  // namespace jpcr::run
