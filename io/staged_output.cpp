@@ -205,12 +205,15 @@ bool is_input_directory_file(const fs::path& inside) {
   return first.rfind("associations", 0) == 0 && inside.extension() == ".txt";
 }
 
-// Whether `dir` is a dataset (depth.txt, associations*.txt) or jpcr_run's or jpcr_curvature's
-// results (report.json, summary.json).
+// Whether `dir` is a dataset (depth.txt, associations*.txt), jpcr_run's results (report.json
+// beside verdicts.txt) or jpcr_curvature's (summary.json beside curvature/). A report.json
+// alone is not enough: it may be jpcr_eval's own, which a second run replaces.
 bool is_dataset_or_results(const fs::path& dir) {
   std::error_code ec;
-  for (const char* marker : {"depth.txt", "report.json", "summary.json"})
-    if (fs::exists(dir / marker, ec)) return true;
+  if (fs::exists(dir / "depth.txt", ec) ||
+      (fs::exists(dir / "report.json", ec) && fs::exists(dir / "verdicts.txt", ec)) ||
+      (fs::exists(dir / "summary.json", ec) && fs::is_directory(dir / "curvature", ec)))
+    return true;
   for (const fs::directory_entry& e : fs::directory_iterator(dir, ec)) {
     const std::string name = e.path().filename().string();
     if (name.rfind("associations", 0) == 0 && e.path().extension() == ".txt") return true;

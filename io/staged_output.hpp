@@ -92,10 +92,10 @@ void require_output_file_apart_from(const std::string& target, const std::string
                                     const std::string& option);
 
 /// Throws InputError when the file `target` is one of those files (as above) of any dataset or
-/// results directory, an input of this run or not: one that holds depth.txt,
-/// associations*.txt, report.json or summary.json. Writing run1/report.json or seq/depth.txt
-/// would destroy them. Checked after require_output_file_apart_from, whose message names the
-/// input.
+/// results directory, an input of this run or not: one that holds depth.txt or
+/// associations*.txt, report.json beside verdicts.txt (jpcr_run) or summary.json beside
+/// curvature/ (jpcr_curvature). Writing run1/report.json or seq/depth.txt would destroy them.
+/// Checked after require_output_file_apart_from, whose message names the input.
 void require_not_dataset_or_results_file(const std::string& target);
 
 }  // namespace jpcr

@@ -41,12 +41,16 @@ expect 0 '"verdict": "indistinguishable"' -- \
 [ -e "$tmp/report.json" ] && { echo "FAIL: partial report written"; fail=1; }
 # Nor a file of another run's results or of a dataset, whatever the inputs.
 mkdir -p "$tmp/run1" "$tmp/seq" && echo '{}' > "$tmp/run1/report.json" && touch "$tmp/seq/depth.txt"
+touch "$tmp/run1/verdicts.txt"
 expect 1 "run1/report.json: is a file of the dataset or results in" -- \
   "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --out "$tmp/run1/report.json"
 expect 1 "seq/depth.txt: is a file of the dataset or results in" -- \
   "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --out "$tmp/seq/depth.txt"
 [ "$(cat "$tmp/run1/report.json")" = "{}" ] && [ ! -s "$tmp/seq/depth.txt" ] ||
   { echo "FAIL: a results or dataset file was overwritten"; fail=1; }
+# jpcr_eval's own report.json (no verdicts.txt beside it) is replaced by a second run.
+expect 0 "translation" -- "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --out "$tmp/mine/report.json"
+expect 0 "translation" -- "$eval_bin" traj --gt "$tmp/gt30.txt" --est "$tmp/est30.txt" --out "$tmp/mine/report.json"
 # Nothing associates: the message names both files.
 printf '100 0 0 0 0 0 0 1\n101 0 0 0 0 0 0 1\n102 0 0 0 0 0 0 1\n' > "$tmp/later.txt"
 expect 1 "later.txt against .*gt30.txt: ATE: only 0 poses associate" -- \

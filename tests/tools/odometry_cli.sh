@@ -97,6 +97,7 @@ expect 1 "newdir/: is a directory, not a file" -- "$odo" --dataset "$fr1" --conf
 # Another run's results are never an output file (jpcr_run's trajectory.txt beside its
 # report.json).
 mkdir -p "$tmp/run1" && echo '{}' > "$tmp/run1/report.json" && echo keep > "$tmp/run1/trajectory.txt"
+touch "$tmp/run1/verdicts.txt"
 expect 1 "run1/trajectory.txt: is a file of the dataset or results in" -- \
   "$odo" --dataset "$fr1" --config "$cam" --frames 2 --out "$tmp/run1/trajectory.txt"
 [ "$(cat "$tmp/run1/trajectory.txt")" = keep ] || { echo "FAIL: run1/trajectory.txt replaced"; fail=1; }
