@@ -97,10 +97,11 @@ void StagedOutput::require_apart_from(const std::string& input, const std::strin
   if (input.empty()) return;
   std::error_code ec;
   const fs::path in = fs::weakly_canonical(fs::absolute(input, ec), ec);
+  // The entry itself is not resolved: commit() renames a link, never what it points to.
+  const fs::path target = fs::weakly_canonical(fs::absolute(target_, ec), ec);
   for (const std::string& name : layout_) {
     const fs::path entry = fs::path(target_) / name;
-    const fs::path inside =
-        in.lexically_relative(fs::weakly_canonical(fs::absolute(entry, ec), ec));
+    const fs::path inside = in.lexically_relative(target / name);
     if (!inside.empty() && *inside.begin() != "..")
       throw InputError(input + ": " + option + " lies in " + entry.string() +
                        ", which this run replaces with its own output (give another --out)");

@@ -59,6 +59,8 @@ class StagedOutput {
   /// Throws InputError when `input` (a dataset, a --config or --params file) is, or lies
   /// inside, one of the target's entries of the layout, which commit() replaces: e.g. a
   /// dataset copied to OUT/curvature. `option` names the input in the message ("--dataset").
+  /// An entry that is a symbolic link is replaced as a link (its target is left alone), so an
+  /// input in the link's target is fine. With an empty layout nothing is checked.
   void require_apart_from(const std::string& input, const std::string& option) const;
 
   /// Moves the staged entries into the target (same file system: renames), all or nothing:

@@ -203,13 +203,13 @@ void DdsDepthSubscriber::reject(const std::string& topic, const std::string& pro
 bool DdsDepthSubscriber::of_this_camera(const std::string& frame_id) {
   if (frame_id.empty() || frame_id == camera_frame_id_) return true;
   if (!camera_frame_id_.empty()) return false;
-  camera_frame_id_ = frame_id;  // the first sample that names its frame fixes the stream's
+  camera_frame_id_ = frame_id;  // the first depth image that names its frame fixes the stream's
   return true;
 }
 
 std::string DdsDepthSubscriber::other_camera(const std::string& frame_id) const {
   return "header.frame_id '" + frame_id + "' is not the stream's '" + camera_frame_id_ +
-         "' (a second camera on the topic?)";
+         "' (a second camera on the topic, or a renamed one: restart to follow it)";
 }
 
 // Decodes what the listeners queued (camera_info first, as a camera driver publishes it first),
@@ -224,10 +224,9 @@ void DdsDepthSubscriber::process() {
     cameras.swap(s.cameras);
   }
   for (const ReceivedCamera& c : cameras) {
-    if (c.camera && !of_this_camera(c.frame_id)) {
-      reject(config_.camera_info_topic, other_camera(c.frame_id));
-    } else if (c.camera) {
+    if (c.camera) {
       s.camera = c.camera;
+      if (!c.frame_id.empty()) camera_info_frame_id_ = c.frame_id;
       if (c.camera->has_distortion() && !distortion_logged_) {
         distortion_logged_ = true;
         *log_ << "jpcr dds: " << config_.camera_info_topic
@@ -265,6 +264,16 @@ void DdsDepthSubscriber::process() {
     if (!of_this_camera(r.frame_id)) {
       reject(config_.depth_topic, other_camera(r.frame_id));
       continue;
+    }
+    // Some drivers publish camera_info in another frame than the depth (aligned depth beside the
+    // colour camera's info): the intrinsics are still the depth's, so it is said once, not
+    // rejected.
+    if (!r.frame_id.empty() && !camera_info_frame_id_.empty() &&
+        camera_info_frame_id_ != r.frame_id && !frame_mismatch_logged_) {
+      frame_mismatch_logged_ = true;
+      *log_ << "jpcr dds: " << config_.camera_info_topic << " is in frame '"
+            << camera_info_frame_id_ << "', the depth images in '" << r.frame_id
+            << "'; the camera_info's intrinsics are used for the depth as they are" << std::endl;
     }
     try {
       s.frames.push_back(decode_depth_frame(r.image.view(), r.stamp, *s.camera, s.limits));

@@ -42,9 +42,10 @@ class DdsDepthSubscriber {
   DdsDepthSubscriber& operator=(const DdsDepthSubscriber&) = delete;
 
   /// The next valid depth frame, waiting up to `timeout`; nullopt on timeout. A depth image that
-  /// arrives before any camera_info waits (in the queue) for one. The first sample that names
-  /// its header.frame_id fixes the stream's camera: a depth image or camera_info naming another
-  /// is rejected, as a malformed one is.
+  /// arrives before any camera_info waits (in the queue) for one. The first depth image that
+  /// names its header.frame_id fixes the stream's camera: a depth image naming another is
+  /// rejected, as a malformed one is. A camera_info in another frame than the depth is used (some
+  /// drivers publish it so) and said once.
   std::optional<Frame> wait_frame(std::chrono::milliseconds timeout);
 
   /// header.frame_id of the depth image of the frame wait_frame returned last ("" before one).
@@ -62,8 +63,8 @@ class DdsDepthSubscriber {
   struct State;
   void process();
   void reject(const std::string& topic, const std::string& problem);
-  // One camera per stream: a depth image or camera_info naming another frame than the first
-  // named one is rejected (an empty frame_id names none).
+  // One camera per stream: a depth image naming another frame than the first named one is
+  // rejected (an empty frame_id names none).
   bool of_this_camera(const std::string& frame_id);
   std::string other_camera(const std::string& frame_id) const;
   void log_incompatible(const std::string& topic, std::atomic<int>& policy);
@@ -73,12 +74,14 @@ class DdsDepthSubscriber {
   std::unique_ptr<State> state_;
   std::size_t frames_ = 0;
   std::string frame_id_;
-  std::string camera_frame_id_;  // the stream's frame: the first one a sample named
+  std::string camera_frame_id_;       // the stream's frame: the first one a depth image named
+  std::string camera_info_frame_id_;  // the last camera_info's
   std::size_t rejected_ = 0;
   std::size_t dropped_seen_ = 0;         // the drops process() has looked at
   std::size_t dropped_logged_ = 0;       // ... and those a log line counted
   LogBudget reject_lines_, drop_lines_;  // the first 10 lines of a kind, then one per 10 s
   bool distortion_logged_ = false;       // the note that D is not applied, once
+  bool frame_mismatch_logged_ = false;   // the note that camera_info names another frame, once
   std::uint32_t lost_ = 0;
 };
 

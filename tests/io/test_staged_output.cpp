@@ -264,6 +264,70 @@ TEST(RequireOutputFileApartFrom, RefusesTheInputsOwnFilesThroughLinksAndAllowsNe
   EXPECT_FALSE(refused(dir.file("data_copy.txt"), data));
 }
 
+// Whatever the inputs, the files of a dataset or of jpcr_run's / jpcr_curvature's results are
+// never output files; jpcr_eval's own report.json (no verdicts.txt beside it) may be replaced.
+TEST(RequireNotDatasetOrResultsFile, RefusesTheFilesOfDatasetsAndResults) {
+  test::TempDir dir;
+  fs::create_directories(dir.file("seq/depth"));
+  write(dir.file("seq/depth.txt"), "");
+  fs::create_directories(dir.file("run1"));
+  write(dir.file("run1/report.json"), "{}");
+  write(dir.file("run1/verdicts.txt"), "");
+  fs::create_directories(dir.file("curv/curvature"));
+  write(dir.file("curv/summary.json"), "{}");
+  fs::create_directories(dir.file("mine"));
+  write(dir.file("mine/report.json"), "{}");
+  const auto refused = [&](const std::string& target) {
+    try {
+      require_not_dataset_or_results_file(target);
+    } catch (const InputError& e) {
+      return std::string(e.what()).find(target + ": is a file of the dataset or results in") == 0;
+    }
+    return false;
+  };
+  EXPECT_TRUE(refused(dir.file("seq/depth.txt")));
+  EXPECT_TRUE(refused(dir.file("seq/groundtruth.txt")));
+  EXPECT_TRUE(refused(dir.file("seq/depth/1.png")));
+  EXPECT_TRUE(refused(dir.file("run1/report.json")));
+  EXPECT_TRUE(refused(dir.file("run1/trajectory.txt")));
+  EXPECT_TRUE(refused(dir.file("curv/summary.json")));
+  EXPECT_FALSE(refused(dir.file("seq/eval.json")));  // a new file beside them
+  EXPECT_FALSE(refused(dir.file("run1/eval.json")));
+  EXPECT_FALSE(refused(dir.file("mine/report.json")));
+}
+
+// An input inside an entry that commit() replaces is refused; one beside the entries, or in the
+// target of an entry that is a link (commit() renames the link only), is not. A failed run
+// removes the parent directories the StagedOutput made.
+TEST(StagedOutput, RefusesInputsInsideTheEntriesItReplaces) {
+  test::TempDir dir;
+  fs::create_directories(dir.file("out/curvature/seq"));
+  fs::create_directories(dir.file("shared"));
+  fs::create_directory_symlink(dir.file("shared"), dir.file("out/ply"));
+  write(dir.file("shared/p.yaml"), "");
+  write(dir.file("out/p.yaml"), "");
+  const StagedOutput out(dir.file("out"), {"curvature", "ply", "summary.json"});
+  const auto refused = [&](const std::string& input) {
+    try {
+      out.require_apart_from(input, "--dataset");
+    } catch (const InputError& e) {
+      return std::string(e.what()).find("--dataset lies in") != std::string::npos;
+    }
+    return false;
+  };
+  EXPECT_TRUE(refused(dir.file("out/curvature/seq")));
+  EXPECT_TRUE(refused(dir.file("out/curvature")));
+  EXPECT_TRUE(refused(dir.file("out/../out/./curvature/seq")));
+  EXPECT_FALSE(refused(dir.file("out/p.yaml")));
+  EXPECT_FALSE(refused(dir.file("shared/p.yaml")));
+  EXPECT_FALSE(refused(dir.file("out/curvature_x")));
+  {
+    const StagedOutput nested(dir.file("a/b/out"), {"x"});
+    EXPECT_TRUE(fs::is_directory(dir.file("a/b")));
+  }  // not committed
+  EXPECT_FALSE(fs::exists(dir.file("a")));
+}
+
 // An OUT on another file system than its parent (a mount point; here a small tmpfs, as root):
 // the staging directory goes inside it, so that commit()'s renames do not fail with EXDEV.
 TEST(StagedOutput, ATargetOnAnotherFileSystemIsStagedInsideIt) {

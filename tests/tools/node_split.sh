@@ -60,7 +60,7 @@ else
   echo "ok: front end: $(cat "$tmp/front.txt")"
 fi
 wait_bounded $back_pid 200; rc=$?
-want="refined $keyframes keyframes of $frames frames, $keyframes curvature maps; rejected 0 samples, skipped 0 messages; stopped by end of stream"
+want="refined $keyframes keyframes of $frames frames, $keyframes curvature maps (0 samples not published); rejected 0 samples, skipped 0 messages; stopped by end of stream"
 if [ $rc != 0 ] || ! grep -qF "$want" "$tmp/back.txt"; then
   echo "FAIL: back end exited $rc"; cat "$tmp/back.txt" "$tmp/back.err"; fail=1
 else

@@ -88,10 +88,10 @@ expect 2 "frames must be >= 0" -- "$odo" --dataset "$fr1" --frames -1 --out "$tm
 expect 2 "summary and --out name the same file" -- \
   "$odo" --dataset "$fr1" --config "$cam" --out "$tmp/x.txt" --summary "$tmp/./x.txt"
 mkdir -p "$tmp/adir"
-expect 1 "adir: is a directory" -- "$odo" --dataset "$fr1" --config "$cam" --out "$tmp/x.txt" \
+expect 1 "adir: names a directory" -- "$odo" --dataset "$fr1" --config "$cam" --out "$tmp/x.txt" \
   --summary "$tmp/adir"
 # A directory name ("DIR/") is refused before the run, not after it.
-expect 1 "newdir/: is a directory, not a file" -- "$odo" --dataset "$fr1" --config "$cam" \
+expect 1 "newdir/: names a directory, not a file" -- "$odo" --dataset "$fr1" --config "$cam" \
   --out "$tmp/newdir/"
 [ -e "$tmp/newdir" ] && { echo "FAIL: newdir/ made for a refused --out"; fail=1; }
 # Another run's results are never an output file (jpcr_run's trajectory.txt beside its

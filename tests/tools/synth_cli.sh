@@ -100,7 +100,11 @@ expect 2 "each 1-16384" -- "$synth" --size 4294967376x60 --out "$tmp/x"
 # An option missing its value does not take the next option for it; --out=--x still can.
 expect 2 "--out needs a value (the next word, --frames, is an option" -- \
   "$synth" --out --frames 1
-[ -e ./--frames ] && { echo "FAIL: wrote ./--frames"; fail=1; }
+# With --force, an input inside OUT (which the run replaces in part) is refused, and kept.
+mkdir -p "$tmp/rail/normals" && printf 'synthetic:\n  trajectory:\n    rate: 30\n' > "$tmp/rail/normals/p.yaml"
+expect 1 "p.yaml: --params lies in --out .*rail, whose entries --force replaces" -- \
+  "$synth" --frames 1 --size 80x60 --params "$tmp/rail/normals/p.yaml" --out "$tmp/rail" --force
+[ -s "$tmp/rail/normals/p.yaml" ] || { echo "FAIL: --params inside OUT was removed"; fail=1; }
 # Timestamps that collide at 1 us stop the run before anything is written.
 printf 'synthetic:
   trajectory:

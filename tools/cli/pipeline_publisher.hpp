@@ -39,6 +39,8 @@ class PipelinePublisher {
   void set_camera_frame_id(const std::string& id) { publisher_.set_camera_frame_id(id); }
   bool flush(std::chrono::milliseconds timeout) const { return publisher_.flush(timeout); }
   std::size_t keyframes_published() const { return keyframes_published_; }
+  /// Samples Cyclone refused to publish (DdsResultPublisher::writes_failed).
+  std::size_t writes_failed() const { return publisher_.writes_failed(); }
 
  private:
   DdsResultPublisher publisher_;

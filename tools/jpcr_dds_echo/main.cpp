@@ -51,7 +51,8 @@ int echo(const DdsParticipant& participant, const EchoOptions& o) {
   const Clock::time_point start = Clock::now();
   constexpr std::chrono::milliseconds kSlice{100};  // signal polling interval while waiting
   int received = 0;
-  while (!cli::stop_requested() && (o.count == 0 || received < o.count)) {
+  // std::cout fails once its reader is gone (| head: SIGPIPE is ignored, cli::run_program).
+  while (!cli::stop_requested() && std::cout && (o.count == 0 || received < o.count)) {
     const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
     if (o.timeout > 0.0 && elapsed >= o.timeout) break;
     reader.wait(kSlice);
@@ -64,6 +65,7 @@ int echo(const DdsParticipant& participant, const EchoOptions& o) {
       }
     });
   }
+  if (!std::cout) return 0;  // the reader of the output has what it wanted
   if (o.count > 0 && received < o.count && !cli::stop_requested()) {
     std::cerr << "jpcr_dds_echo: received " << received << " of " << o.count << " samples on "
               << o.topic << " within " << o.timeout << " s\n";

@@ -77,7 +77,8 @@ int run_all(const NodeOptions& o, const DdsParticipant& participant) {
   if (!publisher.flush(o.flush_timeout))
     std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
   std::cout << "processed " << outcome.processed << " frames, " << runner->keyframe_count()
-            << " keyframes, " << publisher.keyframes_published() << " curvature maps; "
+            << " keyframes, " << publisher.keyframes_published() << " curvature maps ("
+            << publisher.writes_failed() << " samples not published); "
             << node::input_summary(subscriber) << ", skipped " << outcome.skipped
             << " frames; stopped by " << outcome.reason << '\n';
   return 0;
@@ -119,8 +120,10 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
         if (!keyframe) {
           tracked.push_back(f.front_end);
         } else {
-          if (sent == 0 && !keyframes.wait_matched(o.backend_wait,
-                                                   [](double) { return !cli::stop_requested(); }))
+          if (sent == 0 &&
+              !keyframes.wait_matched(o.backend_wait,
+                                      [](double) { return !cli::stop_requested(); }) &&
+              !cli::stop_requested())
             std::cerr << "jpcr_node: no back end on " << keyframe_topic_name(o.dds)
                       << "; sending the keyframes anyway\n";
           waiting = false;
@@ -235,8 +238,10 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
     std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
   std::cout << "refined " << back_end->keyframe_count() << " keyframes of "
             << back_end->frame_count() << " frames, " << publisher.keyframes_published()
-            << " curvature maps; rejected " << reader.samples_rejected() << " samples, skipped "
-            << outcome.skipped << " messages; stopped by " << outcome.reason << '\n';
+            << " curvature maps (" << publisher.writes_failed()
+            << " samples not published); rejected " << reader.samples_rejected()
+            << " samples, skipped " << outcome.skipped << " messages; stopped by " << outcome.reason
+            << '\n';
   if (lost.empty()) return 0;
   std::cerr << "jpcr_node: error: " << lost << "; the back end stopped there\n";
   return 1;

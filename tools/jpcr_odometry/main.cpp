@@ -42,11 +42,17 @@ struct Run {
   std::vector<int> keyframes;
 };
 
-// Makes the missing parent directories of `files`; when one cannot be made, removes those it
-// made before throwing, so a failed run leaves no empty directory behind.
-void make_parents(const std::vector<std::string>& files) {
+// Makes the missing parent directories of `files` and returns them, deepest first, for a run
+// that fails later to remove; when one cannot be made, removes those it made before throwing,
+// so a failed run leaves no empty directory behind.
+std::vector<std::filesystem::path> make_parents(const std::vector<std::string>& files) {
   namespace fs = std::filesystem;
   std::vector<fs::path> made;
+  const auto deepest_first = [&] {
+    std::sort(made.begin(), made.end(), [](const fs::path& a, const fs::path& b) {
+      return a.string().size() > b.string().size();
+    });
+  };
   try {
     for (const std::string& file : files) {
       std::error_code ec;
@@ -57,14 +63,14 @@ void make_parents(const std::vector<std::string>& files) {
       if (!parent.empty()) ensure_directory(parent);
     }
   } catch (...) {
-    std::sort(made.begin(), made.end(), [](const fs::path& a, const fs::path& b) {
-      return a.string().size() > b.string().size();  // deepest first
-    });
+    deepest_first();
     std::error_code ec;
     for (const fs::path& p : made)
       fs::remove(p, ec);  // empty ones only
     throw;
   }
+  deepest_first();
+  return made;
 }
 
 void write_summary(std::ostream& out, const Run& run) {
@@ -172,7 +178,7 @@ int run(int argc, char** argv) {
       require_not_dataset_or_results_file(file);
       const std::filesystem::path name = std::filesystem::path(file).filename();
       if (std::filesystem::is_directory(file) || name.empty() || name == "." || name == "..")
-        throw InputError(file + ": is a directory, not a file to write");
+        throw InputError(file + ": names a directory, not a file to write");
       // The nearest existing parent must be a directory, or no run could write there.
       for (std::filesystem::path p = std::filesystem::path(file).parent_path(); !p.empty();
            p = p.parent_path()) {
@@ -228,29 +234,47 @@ int run(int argc, char** argv) {
     run.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     run.keyframes = tracker.keyframe_indices();
     // Missing parent directories are made only now, so a run that fails creates nothing.
-    make_parents({out, summary});
-    // Both files or neither: each is written beside its target first, then both are renamed;
-    // the trajectory first, so that a failure there leaves both targets as they were.
+    const std::vector<std::filesystem::path> made = make_parents({out, summary});
+    // Both files or neither: each is written beside its target first; then the earlier
+    // trajectory moves aside, the new files move in, and when one cannot, the earlier
+    // trajectory comes back, so both targets are as they were.
     const std::string pid = std::to_string(::getpid());
     const std::string staged = out + ".partial-" + pid,
-                      staged_summary = summary + ".partial-" + pid;
-    const auto discard = [&] {
+                      staged_summary = summary + ".partial-" + pid,
+                      previous = out + ".previous-" + pid;
+    std::error_code ec;
+    const bool had_out = std::filesystem::exists(std::filesystem::symlink_status(out, ec));
+    const auto clean_up = [&] {
       std::remove(staged.c_str());
       std::remove(staged_summary.c_str());
+      for (const std::filesystem::path& p : made)
+        std::filesystem::remove(p, ec);  // empty ones only
+    };
+    const auto fail = [&](const std::string& file, const std::string& why) {
+      clean_up();
+      return InputError(file + ": cannot be moved into place (" + why + ")");
     };
     try {
       write_trajectory(staged, trajectory, "jpcr_odometry " + run.mode + " on " + dataset);
       write_file_atomically(staged_summary, [&](std::ostream& s) { write_summary(s, run); });
     } catch (...) {
-      discard();
+      clean_up();
       throw;
     }
-    for (const auto& [from, to] : {std::pair{staged, out}, std::pair{staged_summary, summary}})
-      if (std::rename(from.c_str(), to.c_str()) != 0) {
-        const std::string why = std::strerror(errno);
-        discard();
-        throw InputError(to + ": cannot be moved into place (" + why + ")");
-      }
+    if (had_out && std::rename(out.c_str(), previous.c_str()) != 0)
+      throw fail(out, std::strerror(errno));
+    if (std::rename(staged.c_str(), out.c_str()) != 0) {
+      const std::string why = std::strerror(errno);
+      if (had_out) std::rename(previous.c_str(), out.c_str());
+      throw fail(out, why);
+    }
+    if (std::rename(staged_summary.c_str(), summary.c_str()) != 0) {
+      const std::string why = std::strerror(errno);
+      std::remove(out.c_str());
+      if (had_out) std::rename(previous.c_str(), out.c_str());
+      throw fail(summary, why);
+    }
+    if (had_out) std::remove(previous.c_str());
     std::cout << "wrote " << trajectory.size() << " poses to " << out << " and the summary to "
               << summary << " (" << run.keyframes.size() << " keyframes, " << failed
               << " frames kept the last motion, " << 1e3 * run.seconds / static_cast<double>(frames)

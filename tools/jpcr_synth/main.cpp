@@ -2,6 +2,7 @@
 // written in the TUM layout (io/synthetic_writer.hpp).
 
 #include <chrono>
+#include <filesystem>
 #include <iostream>
 #include <sstream>
 
@@ -83,6 +84,21 @@ int run(int argc, char** argv) {
     if (args.has("size")) cli::parse_image_size("size", args.get("size"), width, height);
     if (width != camera.width || height != camera.height) camera = camera.resized(width, height);
 
+    // --force replaces the entries written into OUT (depth/, curvature/, the lists, ...): an
+    // input file inside OUT may be one of them, or inside one.
+    if (args.get_flag("force")) {
+      namespace fs = std::filesystem;
+      std::error_code ec;
+      const fs::path out = fs::weakly_canonical(fs::absolute(args.get("out"), ec), ec);
+      for (const char* input : {"config", "params", "scene"}) {
+        if (!args.has(input) || !fs::is_regular_file(args.get(input), ec)) continue;
+        const fs::path inside =
+            fs::weakly_canonical(fs::absolute(args.get(input), ec), ec).lexically_relative(out);
+        if (!inside.empty() && *inside.begin() != "..")
+          throw InputError(args.get(input) + ": --" + input + " lies in --out " + args.get("out") +
+                           ", whose entries --force replaces (give another --out)");
+      }
+    }
     const Clock::time_point start = Clock::now();
     const SyntheticSequence sequence = make_synthetic_sequence(options, camera);
     std::cerr << "jpcr_synth: " << sequence.description() << ", trajectory "
