@@ -9,6 +9,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "jpcr/frontend/point_to_plane_residual.hpp"
+#include "jpcr/quadric/se3.hpp"
 
 namespace jpcr {
 
@@ -31,12 +32,36 @@ void describe(const NormalEquations& eq, IcpResult& r) {
   const Matrix6d H = eq.hessian();
   const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H);
   r.eigenvalues = eig.eigenvalues();
+  // The degeneracy sees the geometry, not the normals' noise. J = B n with B = [I; [p]×]; with
+  // n = (n̄ + δ) / |n̄ + δ|, δ tangent of variance σ² per axis, E[n nᵀ] = (1 − 3σ²) n̄ n̄ᵀ + σ² I
+  // to second order, so E[H] = (1 − 3σ²) H̄ + σ² Σ w B Bᵀ: noisy normals of one plane read as
+  // observing the motions along it (at 1 % range noise more than a room's geometry does). That part
+  // is taken out. σ² comes from the pairs themselves: a pair's two normals see the same surface
+  // point, so E|d|² = E|R n_s − n_t|² = 4σ² (two tangent axes, two frames) whatever the surface's
+  // shape, over the pairs before the normal-angle test. That test keeps the pairs of small |d|,
+  // whose target normals are less noisy: with d = δ_s − δ_t and s = δ_s + δ_t independent
+  // (Gaussian), δ_t = (s − d)/2 has variance σ²/2 + E[|d|² | kept]/8 per axis among the kept pairs.
+  double s2 = 0.0;
+  if (eq.pairs_all > 0 && eq.inliers > 0)
+    s2 = std::clamp(eq.normal_disagreement_all / (8.0 * static_cast<double>(eq.pairs_all)) +
+                        eq.normal_disagreement / (8.0 * static_cast<double>(eq.inliers)),
+                    0.0, 0.25);
+  const double* m = eq.point_moments;
+  const Eigen::Vector3d sum_p(m[0], m[1], m[2]);  // Σ w p
+  Eigen::Matrix3d sum_ppt;                        // Σ w p pᵀ
+  sum_ppt << m[3], m[4], m[5], m[4], m[6], m[7], m[5], m[7], m[8];
+  Matrix6d BBt;  // Σ w B Bᵀ = Σ w [I, −[p]×; [p]×, |p|² I − p pᵀ]
+  BBt.topLeftCorner<3, 3>() = eq.sum_weights * Eigen::Matrix3d::Identity();
+  BBt.bottomLeftCorner<3, 3>() = skew(sum_p);
+  BBt.topRightCorner<3, 3>() = -skew(sum_p);
+  BBt.bottomRightCorner<3, 3>() = sum_ppt.trace() * Eigen::Matrix3d::Identity() - sum_ppt;
+  const Matrix6d G = (H - s2 * BBt) / (1.0 - 3.0 * s2);
   // Unit-free conditioning: ω columns divided by the RMS lever arm (trace ratio of the blocks).
   const double trans = H.topLeftCorner<3, 3>().trace(), rot = H.bottomRightCorner<3, 3>().trace();
   if (trans > 0.0 && rot > 0.0) {
     Vector6d d = Vector6d::Ones();
     d.tail<3>().setConstant(std::sqrt(trans / rot));
-    const Eigen::SelfAdjointEigenSolver<Matrix6d> scaled(d.asDiagonal() * H * d.asDiagonal(),
+    const Eigen::SelfAdjointEigenSolver<Matrix6d> scaled(d.asDiagonal() * G * d.asDiagonal(),
                                                          Eigen::EigenvaluesOnly);
     const Vector6d l = scaled.eigenvalues();
     r.degeneracy = l[5] > 0.0 ? std::max(l[0], 0.0) / l[5] : 0.0;
@@ -55,14 +80,32 @@ void describe(const NormalEquations& eq, IcpResult& r) {
 // Sums over one image row in single precision (at most a few hundred terms), added to the
 // double-precision NormalEquations once per row: float speed, double accumulation.
 struct FloatSums {
-  float upper[21], b[6], cost, sum_squares, sum_weights;
-  std::size_t inliers;
+  float upper[21], b[6], cost, sum_squares, sum_weights, moments[9];
+  float normal_disagreement, normal_disagreement_all;
+  std::size_t inliers, pairs_all;
 
   void clear() {
     std::fill(std::begin(upper), std::end(upper), 0.0f);
     std::fill(std::begin(b), std::end(b), 0.0f);
-    cost = sum_squares = sum_weights = 0.0f;
-    inliers = 0;
+    std::fill(std::begin(moments), std::end(moments), 0.0f);
+    cost = sum_squares = sum_weights = normal_disagreement = normal_disagreement_all = 0.0f;
+    inliers = pairs_all = 0;
+  }
+
+  // For describe()'s correction: |R n_s − n|² = 2 − 2 cos of unit normals, and the moments of
+  // the point p at which J = [n; p × n] is taken.
+  void add_noise_terms(const Eigen::Vector3f& p, float w, float cos_normals) {
+    normal_disagreement += 2.0f - 2.0f * cos_normals;
+    const Eigen::Vector3f wp = w * p;
+    moments[0] += wp.x();
+    moments[1] += wp.y();
+    moments[2] += wp.z();
+    moments[3] += wp.x() * p.x();
+    moments[4] += wp.x() * p.y();
+    moments[5] += wp.x() * p.z();
+    moments[6] += wp.y() * p.y();
+    moments[7] += wp.y() * p.z();
+    moments[8] += wp.z() * p.z();
   }
 
   void add(const Eigen::Matrix<float, 6, 1>& J, float e, float w) {
@@ -87,6 +130,11 @@ struct FloatSums {
     eq.cost += cost;
     eq.sum_squares += sum_squares;
     eq.sum_weights += sum_weights;
+    eq.normal_disagreement += normal_disagreement;
+    eq.normal_disagreement_all += normal_disagreement_all;
+    eq.pairs_all += pairs_all;
+    for (int k = 0; k < 9; ++k)
+      eq.point_moments[k] += moments[k];
     eq.inliers += inliers;
   }
 };
@@ -175,7 +223,10 @@ NormalEquations linearize_point_to_plane(const FramePyramid& source_pyramid,
         // Rejection: distance and normal angle.
         const Eigen::Vector3f d = p - q;
         if (d.squaredNorm() > max_d2) continue;
-        if ((R * ns).dot(n) < min_cos) continue;
+        const float cos_normals = (R * ns).dot(n);
+        row.normal_disagreement_all += 2.0f - 2.0f * cos_normals;
+        ++row.pairs_all;
+        if (cos_normals < min_cos) continue;
         const float e = n.dot(d);  // PointToPlaneResidual::error
         float w = robust_weight(e, loss, scale);
         if (w <= 0.0f) continue;
@@ -184,6 +235,7 @@ NormalEquations linearize_point_to_plane(const FramePyramid& source_pyramid,
         for (int k = 0; k < depth_exponent; ++k)
           w *= inv_z_target;
         row.add(PointToPlaneResidual<float>::jacobian(p, n), e, w);
+        row.add_noise_terms(p, w, cos_normals);
       }
       row.flush_into(local);
     }
