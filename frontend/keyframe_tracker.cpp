@@ -99,15 +99,20 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
     if (is_good(r.icp)) {
       r.T_wc.pose = T_w_ref * r.icp.pose;
       last_good_motion_ = previous_pose_.inverse() * r.T_wc.pose;
-      last_good_icp_covariance_ = r.icp.covariance;
       const Matrix6d Ad = se3_adjoint(T_w_ref);
+      last_good_icp_covariance_ = Ad * r.icp.covariance * Ad.transpose();  // in map axes
       r.pose_covariance = (to_keyframe ? keyframe_.pose_covariance : previous_covariance_) +
-                          Ad * r.icp.covariance * Ad.transpose();
+                          *last_good_icp_covariance_;
     } else {
       r.T_wc.pose = previous_pose_ * last_good_motion_;  // say so rather than drift silently
       r.kept_last_motion = true;
+      // The last good alignment's uncertainty, as that of the guessed step: in map axes, since
+      // against the keyframe the alignment's own axes are the keyframe's, not the last frame's.
+      // Before any, 1 m and 1 rad per axis of the camera: an unknown motion.
       const Matrix6d Ad = se3_adjoint(previous_pose_);
-      r.pose_covariance = previous_covariance_ + Ad * last_good_icp_covariance_ * Ad.transpose();
+      r.pose_covariance =
+          previous_covariance_ +
+          (last_good_icp_covariance_ ? *last_good_icp_covariance_ : Matrix6d(Ad * Ad.transpose()));
     }
     // Keyframe policy: far enough from the keyframe, or too little overlap with it, or a failed
     // alignment; but never a frame without the points to align against. Against the keyframe,

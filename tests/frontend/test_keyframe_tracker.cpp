@@ -170,8 +170,10 @@ TEST(KeyframeTracker, PoseCovarianceAccumulatesAlongTheChainOfAlignments) {
   EXPECT_EQ(r[0].pose_covariance, Matrix6d::Zero());
   for (std::size_t i = 1; i < 5; ++i) {
     const Matrix6d step = r[i].pose_covariance - r[i - 1].pose_covariance;
+    // The blackout (frame 4) takes frame 3's alignment covariance as it was carried into map
+    // axes, at frame 3's reference (frame 2).
     const Matrix6d& icp = i < 4 ? r[i].icp.covariance : r[3].icp.covariance;
-    const Matrix6d Ad = se3_adjoint(r[i - 1].T_wc.pose);
+    const Matrix6d Ad = se3_adjoint(r[i < 4 ? i - 1 : 2].T_wc.pose);
     EXPECT_LT((step - Ad * icp * Ad.transpose()).norm(), 1e-9 * step.norm()) << "frame " << i;
     EXPECT_GT(step.trace(), 0.0) << "frame " << i;
     // Carried into world axes, not added in the camera's: the trace of the rotation block is
@@ -181,6 +183,23 @@ TEST(KeyframeTracker, PoseCovarianceAccumulatesAlongTheChainOfAlignments) {
     EXPECT_NEAR(rotation_in_world, rotation_in_camera, 1e-9 * icp.trace());
   }
   EXPECT_TRUE(r[4].kept_last_motion);
+
+  // Against the keyframe (frame 0 here), frame 3's alignment covariance is in the keyframe's
+  // axes: the blackout adds it as carried into map axes there, i.e. frame 3's own increment
+  // (it added it in frame 3's camera axes before).
+  params.tracker.mode = TrackingMode::frame_to_keyframe;
+  KeyframeTracker to_keyframe(params, seq.ground_truth(0).value());
+  std::vector<TrackResult> k;
+  for (std::size_t i = 0; i < 5; ++i) {
+    Frame f = seq.load(i);
+    if (i == 4) f.depth = DepthImage(f.depth.width(), f.depth.height(), 0.0f);
+    k.push_back(to_keyframe.track(f));
+  }
+  ASSERT_EQ(k[3].reference, 0);
+  ASSERT_TRUE(k[4].kept_last_motion);
+  const Matrix6d step = k[4].pose_covariance - k[3].pose_covariance;
+  const Matrix6d increment = k[3].pose_covariance - k[0].pose_covariance;
+  EXPECT_LT((step - increment).norm(), 1e-9 * increment.norm());
 }
 
 // A blackout before any alignment succeeded: the frame keeps the (identity) motion, and its pose
