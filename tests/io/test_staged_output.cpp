@@ -4,6 +4,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 
 #include <gtest/gtest.h>
 
@@ -27,6 +28,16 @@ int entries(const std::string& dir) {
 
 void write(const std::string& path, const std::string& text) {
   write_file_atomically(path, [&](std::ostream& out) { out << text; });
+}
+
+// Whether `check` throws an InputError whose message holds `message`.
+bool refused_with(const std::function<void()>& check, const std::string& message) {
+  try {
+    check();
+  } catch (const InputError& e) {
+    return std::string(e.what()).find(message) != std::string::npos;
+  }
+  return false;
 }
 
 TEST(StagedOutput, NothingReachesTheTargetBeforeCommit) {
@@ -278,22 +289,15 @@ TEST(RequireNotDatasetOrResultsFile, RefusesTheFilesOfDatasetsAndResults) {
   fs::create_directories(dir.file("mine"));
   write(dir.file("mine/report.json"), "{}");
   const auto refused = [&](const std::string& target) {
-    try {
-      require_not_dataset_or_results_file(target);
-    } catch (const InputError& e) {
-      return std::string(e.what()).find(target + ": is a file of the dataset or results in") == 0;
-    }
-    return false;
+    return refused_with([&] { require_not_dataset_or_results_file(target); },
+                        target + ": is a file of the dataset or results in");
   };
-  EXPECT_TRUE(refused(dir.file("seq/depth.txt")));
-  EXPECT_TRUE(refused(dir.file("seq/groundtruth.txt")));
-  EXPECT_TRUE(refused(dir.file("seq/depth/1.png")));
-  EXPECT_TRUE(refused(dir.file("run1/report.json")));
-  EXPECT_TRUE(refused(dir.file("run1/trajectory.txt")));
-  EXPECT_TRUE(refused(dir.file("curv/summary.json")));
-  EXPECT_FALSE(refused(dir.file("seq/eval.json")));  // a new file beside them
-  EXPECT_FALSE(refused(dir.file("run1/eval.json")));
-  EXPECT_FALSE(refused(dir.file("mine/report.json")));
+  for (const char* file : {"seq/depth.txt", "seq/groundtruth.txt", "seq/depth/1.png",
+                           "run1/report.json", "run1/trajectory.txt", "curv/summary.json"})
+    EXPECT_TRUE(refused(dir.file(file))) << file;
+  // New files beside them, and jpcr_eval's own report.
+  for (const char* file : {"seq/eval.json", "run1/eval.json", "mine/report.json"})
+    EXPECT_FALSE(refused(dir.file(file))) << file;
 }
 
 // An input inside an entry that commit() replaces is refused; one beside the entries, or in the
@@ -308,19 +312,12 @@ TEST(StagedOutput, RefusesInputsInsideTheEntriesItReplaces) {
   write(dir.file("out/p.yaml"), "");
   const StagedOutput out(dir.file("out"), {"curvature", "ply", "summary.json"});
   const auto refused = [&](const std::string& input) {
-    try {
-      out.require_apart_from(input, "--dataset");
-    } catch (const InputError& e) {
-      return std::string(e.what()).find("--dataset lies in") != std::string::npos;
-    }
-    return false;
+    return refused_with([&] { out.require_apart_from(input, "--dataset"); }, "--dataset lies in");
   };
-  EXPECT_TRUE(refused(dir.file("out/curvature/seq")));
-  EXPECT_TRUE(refused(dir.file("out/curvature")));
-  EXPECT_TRUE(refused(dir.file("out/../out/./curvature/seq")));
-  EXPECT_FALSE(refused(dir.file("out/p.yaml")));
-  EXPECT_FALSE(refused(dir.file("shared/p.yaml")));
-  EXPECT_FALSE(refused(dir.file("out/curvature_x")));
+  for (const char* input : {"out/curvature/seq", "out/curvature", "out/../out/./curvature/seq"})
+    EXPECT_TRUE(refused(dir.file(input))) << input;
+  for (const char* input : {"out/p.yaml", "shared/p.yaml", "out/curvature_x"})
+    EXPECT_FALSE(refused(dir.file(input))) << input;
   {
     const StagedOutput nested(dir.file("a/b/out"), {"x"});
     EXPECT_TRUE(fs::is_directory(dir.file("a/b")));
