@@ -17,10 +17,7 @@ struct NormalEquations {
   double cost = 0.0;         // Σ w e²
   double sum_squares = 0.0;  // Σ e² (unweighted, for the RMS)
   double sum_weights = 0.0;
-  // Σ |R n_source − n_target|² over the pairs (0 if unset), and over every pair that passed the
-  // distance test, before the normal-angle test, with their number.
-  double normal_disagreement = 0.0, normal_disagreement_all = 0.0;
-  std::size_t pairs_all = 0;
+  double normal_disagreement = 0.0;  // Σ w |R n_source − n_target|² over the pairs (0 if unset)
   double point_moments[9] = {};  // Σ w p (3), Σ w p pᵀ upper triangle (6) of the points J is at
   std::size_t inliers = 0;       // pairs that passed the rejection tests
   std::size_t valid = 0;         // source points considered
@@ -51,8 +48,6 @@ struct NormalEquations {
     sum_squares += o.sum_squares;
     sum_weights += o.sum_weights;
     normal_disagreement += o.normal_disagreement;
-    normal_disagreement_all += o.normal_disagreement_all;
-    pairs_all += o.pairs_all;
     for (int k = 0; k < 9; ++k)
       point_moments[k] += o.point_moments[k];
     inliers += o.inliers;

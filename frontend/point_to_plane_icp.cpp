@@ -24,8 +24,27 @@ double samples(const PyramidLevel& level, int stride) {
          std::ceil(level.camera.height / static_cast<double>(stride));
 }
 
-// Final statistics of an alignment from its last normal equations.
-void describe(const NormalEquations& eq, IcpResult& r) {
+// σ² per tangent axis of both frames' normals from the mean of |d|² = |R n_s − n_t|² over the
+// pairs the normal-angle test kept, |d|² ≤ c = 2 − 2 cos(max_angle): |d|² is exponential with
+// mean 4σ², so E[|d|² | |d|² ≤ c] = 4σ² − c e^(−c/4σ²) / (1 − e^(−c/4σ²)), rising from 0 to c/2;
+// solved by bisection (a mean at c/2 or above gives the largest σ² searched, c).
+double normal_noise(double kept_mean, double max_angle_deg) {
+  const double c = 2.0 - 2.0 * std::cos(max_angle_deg * kDegToRad);
+  const auto truncated_mean = [c](double s2) {
+    const double e = std::exp(-c / (4.0 * s2));
+    return 4.0 * s2 - c * e / (1.0 - e);
+  };
+  double lo = 0.0, hi = c;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (truncated_mean(mid) < kept_mean ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+// Final statistics of an alignment from its last normal equations (max_normal_angle: the pairs'
+// normal-angle test, deg).
+void describe(const NormalEquations& eq, double max_normal_angle, IcpResult& r) {
   r.inliers = eq.inliers;
   r.inlier_ratio = eq.valid > 0 ? static_cast<double>(eq.inliers) / eq.valid : 0.0;
   r.rms = eq.inliers > 0 ? std::sqrt(eq.sum_squares / eq.inliers) : 0.0;
@@ -35,17 +54,18 @@ void describe(const NormalEquations& eq, IcpResult& r) {
   // The degeneracy sees the geometry, not the normals' noise. J = B n with B = [I; [p]×]; with
   // n = (n̄ + δ) / |n̄ + δ|, δ tangent of variance σ² per axis, E[n nᵀ] = (1 − 3σ²) n̄ n̄ᵀ + σ² I
   // to second order, so E[H] = (1 − 3σ²) H̄ + σ² Σ w B Bᵀ: noisy normals of one plane read as
-  // observing the motions along it (at 1 % range noise more than a room's geometry does). That part
-  // is taken out. σ² comes from the pairs themselves: a pair's two normals see the same surface
-  // point, so E|d|² = E|R n_s − n_t|² = 4σ² (two tangent axes, two frames) whatever the surface's
-  // shape, over the pairs before the normal-angle test. That test keeps the pairs of small |d|,
-  // whose target normals are less noisy: with d = δ_s − δ_t and s = δ_s + δ_t independent
-  // (Gaussian), δ_t = (s − d)/2 has variance σ²/2 + E[|d|² | kept]/8 per axis among the kept pairs.
+  // observing the motions along it (at 1 % range noise more than a room's geometry does). That
+  // part is taken out (the covariance keeps H as it is). σ² comes from the pairs themselves: a
+  // pair's two normals see the same surface point, so |d|² = |R n_s − n_t|² is exponential with
+  // mean 4σ² whatever the surface's shape (normal_noise() undoes the normal-angle test's cut).
+  // That test keeps the pairs of small |d|, whose target normals are less noisy: with
+  // d = δ_s − δ_t and s = δ_s + δ_t independent (Gaussian), δ_t = (s − d)/2 has variance
+  // σ²/2 + E[|d|² | kept]/8 per axis among the kept pairs. Means weighted as JᵀWJ is.
   double s2 = 0.0;
-  if (eq.pairs_all > 0 && eq.inliers > 0)
-    s2 = std::clamp(eq.normal_disagreement_all / (8.0 * static_cast<double>(eq.pairs_all)) +
-                        eq.normal_disagreement / (8.0 * static_cast<double>(eq.inliers)),
-                    0.0, 0.25);
+  if (eq.sum_weights > 0.0) {
+    const double kept = eq.normal_disagreement / eq.sum_weights;  // E_w[|d|² | kept]
+    s2 = std::clamp(0.5 * normal_noise(kept, max_normal_angle) + kept / 8.0, 0.0, 0.25);
+  }
   const double* m = eq.point_moments;
   const Eigen::Vector3d sum_p(m[0], m[1], m[2]);  // Σ w p
   Eigen::Matrix3d sum_ppt;                        // Σ w p pᵀ
@@ -81,21 +101,21 @@ void describe(const NormalEquations& eq, IcpResult& r) {
 // double-precision NormalEquations once per row: float speed, double accumulation.
 struct FloatSums {
   float upper[21], b[6], cost, sum_squares, sum_weights, moments[9];
-  float normal_disagreement, normal_disagreement_all;
-  std::size_t inliers, pairs_all;
+  float normal_disagreement;
+  std::size_t inliers;
 
   void clear() {
     std::fill(std::begin(upper), std::end(upper), 0.0f);
     std::fill(std::begin(b), std::end(b), 0.0f);
     std::fill(std::begin(moments), std::end(moments), 0.0f);
-    cost = sum_squares = sum_weights = normal_disagreement = normal_disagreement_all = 0.0f;
-    inliers = pairs_all = 0;
+    cost = sum_squares = sum_weights = normal_disagreement = 0.0f;
+    inliers = 0;
   }
 
   // For describe()'s correction: |R n_s − n|² = 2 − 2 cos of unit normals, and the moments of
   // the point p at which J = [n; p × n] is taken.
   void add_noise_terms(const Eigen::Vector3f& p, float w, float cos_normals) {
-    normal_disagreement += 2.0f - 2.0f * cos_normals;
+    normal_disagreement += w * (2.0f - 2.0f * cos_normals);
     const Eigen::Vector3f wp = w * p;
     moments[0] += wp.x();
     moments[1] += wp.y();
@@ -131,8 +151,6 @@ struct FloatSums {
     eq.sum_squares += sum_squares;
     eq.sum_weights += sum_weights;
     eq.normal_disagreement += normal_disagreement;
-    eq.normal_disagreement_all += normal_disagreement_all;
-    eq.pairs_all += pairs_all;
     for (int k = 0; k < 9; ++k)
       eq.point_moments[k] += moments[k];
     eq.inliers += inliers;
@@ -224,8 +242,6 @@ NormalEquations linearize_point_to_plane(const FramePyramid& source_pyramid,
         const Eigen::Vector3f d = p - q;
         if (d.squaredNorm() > max_d2) continue;
         const float cos_normals = (R * ns).dot(n);
-        row.normal_disagreement_all += 2.0f - 2.0f * cos_normals;
-        ++row.pairs_all;
         if (cos_normals < min_cos) continue;
         const float e = n.dot(d);  // PointToPlaneResidual::error
         float w = robust_weight(e, loss, scale);
@@ -283,7 +299,7 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
       last_stride = stride;
       have_system = true;
       if (static_cast<double>(eq.inliers) < needed) {
-        describe(eq, result);
+        describe(eq, params.max_normal_angle, result);
         result.pose = initial;
         result.verdict = IcpVerdict::too_few_points;
         return result;
@@ -295,7 +311,7 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
       const Vector6d xi = H.ldlt().solve(-eq.gradient());
       ++result.iterations;
       if (!xi.allFinite()) {
-        describe(eq, result);
+        describe(eq, params.max_normal_angle, result);
         result.verdict = IcpVerdict::diverged;
         return result;
       }
@@ -310,7 +326,7 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
     }
   }
   if (have_system) {
-    describe(last, result);
+    describe(last, params.max_normal_angle, result);
     // Filtered depth: the residuals' errors are shared between neighbouring pixels (both
     // frames' noise enters each residual; each frame's filter counts for its half).
     if (last.inliers > 0)
