@@ -100,19 +100,21 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
       r.T_wc.pose = T_w_ref * r.icp.pose;
       last_good_motion_ = previous_pose_.inverse() * r.T_wc.pose;
       const Matrix6d Ad = se3_adjoint(T_w_ref);
-      last_good_icp_covariance_ = Ad * r.icp.covariance * Ad.transpose();  // in map axes
       r.pose_covariance = (to_keyframe ? keyframe_.pose_covariance : previous_covariance_) +
-                          *last_good_icp_covariance_;
+                          Ad * r.icp.covariance * Ad.transpose();
+      // As the uncertainty of this frame's step, in the axes of the step's start (the previous
+      // frame): against the keyframe the alignment's own axes are the keyframe's.
+      const Matrix6d to_step = se3_adjoint(previous_pose_.inverse() * T_w_ref);
+      last_good_step_covariance_ = to_step * r.icp.covariance * to_step.transpose();
     } else {
       r.T_wc.pose = previous_pose_ * last_good_motion_;  // say so rather than drift silently
       r.kept_last_motion = true;
-      // The last good alignment's uncertainty, as that of the guessed step: in map axes, since
-      // against the keyframe the alignment's own axes are the keyframe's, not the last frame's.
-      // Before any, 1 m and 1 rad per axis of the camera: an unknown motion.
+      // The guessed step repeats the last good one from the previous frame, with its
+      // uncertainty; before any, 1 m and 1 rad per axis: an unknown motion.
       const Matrix6d Ad = se3_adjoint(previous_pose_);
       r.pose_covariance =
           previous_covariance_ +
-          (last_good_icp_covariance_ ? *last_good_icp_covariance_ : Matrix6d(Ad * Ad.transpose()));
+          Ad * last_good_step_covariance_.value_or(Matrix6d::Identity()) * Ad.transpose();
     }
     // Keyframe policy: far enough from the keyframe, or too little overlap with it, or a failed
     // alignment; but never a frame without the points to align against. Against the keyframe,

@@ -79,8 +79,8 @@ class KeyframeTracker {
   Eigen::Isometry3d previous_pose_ = Eigen::Isometry3d::Identity();
   Eigen::Isometry3d last_good_motion_ = Eigen::Isometry3d::Identity();  // T_prev,cur
   Matrix6d previous_covariance_ = Matrix6d::Zero();  // the previous frame's pose_covariance
-  // Of the last good alignment, in map axes; none before the first.
-  std::optional<Matrix6d> last_good_icp_covariance_;
+  // Of the last good alignment's step, in the axes of its start frame; none before the first.
+  std::optional<Matrix6d> last_good_step_covariance_;
 };
 
 }  // namespace jpcr

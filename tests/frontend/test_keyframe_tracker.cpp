@@ -170,10 +170,8 @@ TEST(KeyframeTracker, PoseCovarianceAccumulatesAlongTheChainOfAlignments) {
   EXPECT_EQ(r[0].pose_covariance, Matrix6d::Zero());
   for (std::size_t i = 1; i < 5; ++i) {
     const Matrix6d step = r[i].pose_covariance - r[i - 1].pose_covariance;
-    // The blackout (frame 4) takes frame 3's alignment covariance as it was carried into map
-    // axes, at frame 3's reference (frame 2).
     const Matrix6d& icp = i < 4 ? r[i].icp.covariance : r[3].icp.covariance;
-    const Matrix6d Ad = se3_adjoint(r[i < 4 ? i - 1 : 2].T_wc.pose);
+    const Matrix6d Ad = se3_adjoint(r[i - 1].T_wc.pose);
     EXPECT_LT((step - Ad * icp * Ad.transpose()).norm(), 1e-9 * step.norm()) << "frame " << i;
     EXPECT_GT(step.trace(), 0.0) << "frame " << i;
     // Carried into world axes, not added in the camera's: the trace of the rotation block is
@@ -184,9 +182,10 @@ TEST(KeyframeTracker, PoseCovarianceAccumulatesAlongTheChainOfAlignments) {
   }
   EXPECT_TRUE(r[4].kept_last_motion);
 
-  // Against the keyframe (frame 0 here), frame 3's alignment covariance is in the keyframe's
-  // axes: the blackout adds it as carried into map axes there, i.e. frame 3's own increment
-  // (it added it in frame 3's camera axes before).
+  // Against the keyframe (frame 0 here), frame 3's alignment covariance Σ is in the keyframe's
+  // axes: the blackout repeats frame 3's step from frame 3, so it adds Σ carried from the
+  // keyframe to frame 2 (the step's start), then from frame 3 into map axes (it added Σ as if in
+  // frame 3's own axes before).
   params.tracker.mode = TrackingMode::frame_to_keyframe;
   KeyframeTracker to_keyframe(params, seq.ground_truth(0).value());
   std::vector<TrackResult> k;
@@ -198,8 +197,9 @@ TEST(KeyframeTracker, PoseCovarianceAccumulatesAlongTheChainOfAlignments) {
   ASSERT_EQ(k[3].reference, 0);
   ASSERT_TRUE(k[4].kept_last_motion);
   const Matrix6d step = k[4].pose_covariance - k[3].pose_covariance;
-  const Matrix6d increment = k[3].pose_covariance - k[0].pose_covariance;
-  EXPECT_LT((step - increment).norm(), 1e-9 * increment.norm());
+  const Matrix6d Ad = se3_adjoint(k[3].T_wc.pose * k[2].T_wc.pose.inverse() * k[0].T_wc.pose);
+  const Matrix6d expected = Ad * k[3].icp.covariance * Ad.transpose();
+  EXPECT_LT((step - expected).norm(), 1e-9 * expected.norm());
 }
 
 // A blackout before any alignment succeeded: the frame keeps the (identity) motion, and its pose
