@@ -224,7 +224,14 @@ void DdsDepthSubscriber::process() {
     cameras.swap(s.cameras);
   }
   for (const ReceivedCamera& c : cameras) {
-    if (c.camera) {
+    // The first camera_info that names its frame fixes the camera_info's frame (which may differ
+    // from the depth's); one of another frame is a second camera's.
+    if (c.camera && !c.frame_id.empty() && !camera_info_frame_id_.empty() &&
+        c.frame_id != camera_info_frame_id_) {
+      reject(config_.camera_info_topic, "header.frame_id '" + c.frame_id +
+                                            "' is not the stream's camera_info frame '" +
+                                            camera_info_frame_id_ + "' (a second camera?)");
+    } else if (c.camera) {
       s.camera = c.camera;
       if (!c.frame_id.empty()) camera_info_frame_id_ = c.frame_id;
       if (c.camera->has_distortion() && !distortion_logged_) {

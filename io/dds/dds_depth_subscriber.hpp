@@ -45,7 +45,8 @@ class DdsDepthSubscriber {
   /// arrives before any camera_info waits (in the queue) for one. The first depth image that
   /// names its header.frame_id fixes the stream's camera: a depth image naming another is
   /// rejected, as a malformed one is. A camera_info in another frame than the depth is used (some
-  /// drivers publish it so) and said once.
+  /// drivers publish it so) and said once; the first camera_info that names its frame fixes
+  /// that frame, and one of another is rejected.
   std::optional<Frame> wait_frame(std::chrono::milliseconds timeout);
 
   /// header.frame_id of the depth image of the frame wait_frame returned last ("" before one).
@@ -75,7 +76,7 @@ class DdsDepthSubscriber {
   std::size_t frames_ = 0;
   std::string frame_id_;
   std::string camera_frame_id_;       // the stream's frame: the first one a depth image named
-  std::string camera_info_frame_id_;  // the last camera_info's
+  std::string camera_info_frame_id_;  // the first camera_info's that named one
   std::size_t rejected_ = 0;
   std::size_t dropped_seen_ = 0;         // the drops process() has looked at
   std::size_t dropped_logged_ = 0;       // ... and those a log line counted

@@ -176,7 +176,7 @@ TEST_F(DdsDepth, MalformedSamplesAreRejectedAndReceptionGoesOn) {
   RosCameraInfo bad_info = info;
   bad_info.p[0] = 0.0;
   infos.write(camera_info_message(bad_info, 1.0, frame_id));
-  // A camera_info in another frame than the depth is used, and said once.
+  // A camera_info in another frame than the first camera_info's is a second camera's.
   infos.write(camera_info_message(info, 1.0, "colour_frame"));
   const Frame next = test_frame(2.0);
   const RosImageBuffer next_depth = encode_depth_image(next.depth, DepthEncoding::kMillimetres16);
@@ -190,7 +190,7 @@ TEST_F(DdsDepth, MalformedSamplesAreRejectedAndReceptionGoesOn) {
     images.write(image_message(b, 3.0, "other_cam"));
   }
   EXPECT_FALSE(subscriber.wait_frame(milliseconds(500)));
-  EXPECT_EQ(subscriber.samples_rejected(), 8u) << log.str();
+  EXPECT_EQ(subscriber.samples_rejected(), 9u) << log.str();
   EXPECT_EQ(subscriber.frames_received(), 1u);
   const std::string text = log.str();
   // One line per rejected sample, and one (once) that the camera's lens distortion is not applied.
@@ -203,7 +203,8 @@ TEST_F(DdsDepth, MalformedSamplesAreRejectedAndReceptionGoesOn) {
         "big-endian data is not supported", "step 10 < width x 2 bytes = 640",
         "camera_info: rejected sample: camera_info P focal lengths fx = 0.000000",
         "image_raw: rejected sample: header.frame_id 'other_cam' is not the stream's 'cam'",
-        "camera_info is in frame 'colour_frame', the depth images in 'cam'"}) {
+        "camera_info: rejected sample: header.frame_id 'colour_frame' is not the stream's "
+        "camera_info frame 'cam'"}) {
     EXPECT_NE(text.find(expected), std::string::npos) << expected << "\nin:\n" << text;
   }
 }
@@ -224,6 +225,34 @@ TEST_F(DdsDepth, DepthBeforeCameraInfoWaitsForIt) {
   const std::optional<Frame> got = subscriber.wait_frame(kTimeout);
   ASSERT_TRUE(got);
   expect_same_frame(*got, sent, 1.0);
+}
+
+// Aligned depth beside the colour camera's camera_info (realsense-ros, xarm_ros2): the frames are
+// used, with one line that names both frames.
+TEST_F(DdsDepth, ACameraInfoInAnotherFrameThanTheDepthIsUsedAndSaidOnce) {
+  std::ostringstream log;
+  DdsDepthSubscriber subscriber(node_side_, config_, &log);
+  DdsWriter<RosImage> images(camera_side_, config_.depth_topic, config_.depth_qos());
+  DdsWriter<RosCameraInfoMsg> infos(camera_side_, config_.camera_info_topic,
+                                    config_.camera_info_qos());
+  ASSERT_TRUE(images.wait_matched(1, kTimeout) && infos.wait_matched(1, kTimeout));
+  for (const double t : {5.0, 6.0}) {
+    const Frame sent = test_frame(t);
+    infos.write(camera_info_message(encode_camera_info(sent.camera), t, "colour_frame"));
+    EXPECT_FALSE(subscriber.wait_frame(milliseconds(100)));  // the camera_info lands first
+    const RosImageBuffer depth = encode_depth_image(sent.depth, DepthEncoding::kMetres32);
+    images.write(image_message(depth, t, "depth_frame"));
+    const std::optional<Frame> got = subscriber.wait_frame(kTimeout);
+    ASSERT_TRUE(got) << log.str();
+    expect_same_frame(*got, sent, 1.0);
+    EXPECT_EQ(subscriber.frame_id(), "depth_frame");
+  }
+  EXPECT_EQ(subscriber.samples_rejected(), 0u) << log.str();
+  const std::string text = log.str();
+  EXPECT_NE(text.find("is in frame 'colour_frame', the depth images in 'depth_frame'"),
+            std::string::npos)
+      << text;
+  EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 2) << text;  // that line, and D's
 }
 
 // A best-effort camera (ROS sensor-data QoS) cannot match the reliable default: Cyclone delivers

@@ -1,7 +1,9 @@
 // jpcr_dds_echo: subscribes to one DDS topic of a ROS 2 type and prints one summary line per
 // sample (stamp, frame, pose or image layout, whether an image decodes and why not).
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 #include <iostream>
 #include <type_traits>
 
@@ -65,7 +67,11 @@ int echo(const DdsParticipant& participant, const EchoOptions& o) {
       }
     });
   }
-  if (!std::cout) return 0;  // the reader of the output has what it wanted
+  if (!std::cout) {
+    if (errno == EPIPE) return 0;  // the reader of the output has what it wanted
+    std::cerr << "jpcr_dds_echo: error: cannot write the output: " << std::strerror(errno) << '\n';
+    return 1;
+  }
   if (o.count > 0 && received < o.count && !cli::stop_requested()) {
     std::cerr << "jpcr_dds_echo: received " << received << " of " << o.count << " samples on "
               << o.topic << " within " << o.timeout << " s\n";

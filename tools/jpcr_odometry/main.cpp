@@ -235,9 +235,9 @@ int run(int argc, char** argv) {
     run.keyframes = tracker.keyframe_indices();
     // Missing parent directories are made only now, so a run that fails creates nothing.
     const std::vector<std::filesystem::path> made = make_parents({out, summary});
-    // Both files or neither: each is written beside its target first; then the earlier
-    // trajectory moves aside, the new files move in, and when one cannot, the earlier
-    // trajectory comes back, so both targets are as they were.
+    // Both files or neither: each is written beside its target first; then the new files move
+    // in, and when one cannot, the earlier trajectory comes back, so both targets are as they
+    // were.
     const std::string pid = std::to_string(::getpid());
     const std::string staged = out + ".partial-" + pid,
                       staged_summary = summary + ".partial-" + pid,
@@ -261,18 +261,28 @@ int run(int argc, char** argv) {
       clean_up();
       throw;
     }
-    if (had_out && std::rename(out.c_str(), previous.c_str()) != 0)
-      throw fail(out, std::strerror(errno));
+    // The earlier trajectory gets a second name (a hard link), so OUT never goes missing; where
+    // links are not possible it is moved aside instead.
+    bool linked = false;
+    if (had_out) {
+      std::remove(previous.c_str());
+      linked = ::link(out.c_str(), previous.c_str()) == 0;
+      if (!linked && std::rename(out.c_str(), previous.c_str()) != 0)
+        throw fail(out, std::strerror(errno));
+    }
+    const auto put_back = [&](const std::string& why) {
+      if (had_out && std::rename(previous.c_str(), out.c_str()) != 0)
+        return why + "; the earlier " + out + " is kept as " + previous;
+      if (!had_out) std::remove(out.c_str());
+      return why;
+    };
     if (std::rename(staged.c_str(), out.c_str()) != 0) {
       const std::string why = std::strerror(errno);
-      if (had_out) std::rename(previous.c_str(), out.c_str());
-      throw fail(out, why);
+      throw fail(out, put_back(why));
     }
     if (std::rename(staged_summary.c_str(), summary.c_str()) != 0) {
       const std::string why = std::strerror(errno);
-      std::remove(out.c_str());
-      if (had_out) std::rename(previous.c_str(), out.c_str());
-      throw fail(summary, why);
+      throw fail(summary, put_back(why));
     }
     if (had_out) std::remove(previous.c_str());
     std::cout << "wrote " << trajectory.size() << " poses to " << out << " and the summary to "
