@@ -263,11 +263,10 @@ int run(int argc, char** argv) {
     }
     // The earlier trajectory gets a second name (a hard link), so OUT never goes missing; where
     // links are not possible it is moved aside instead.
-    bool linked = false;
     if (had_out) {
       std::remove(previous.c_str());
-      linked = ::link(out.c_str(), previous.c_str()) == 0;
-      if (!linked && std::rename(out.c_str(), previous.c_str()) != 0)
+      if (::link(out.c_str(), previous.c_str()) != 0 &&
+          std::rename(out.c_str(), previous.c_str()) != 0)
         throw fail(out, std::strerror(errno));
     }
     const auto put_back = [&](const std::string& why) {
@@ -276,14 +275,11 @@ int run(int argc, char** argv) {
       if (!had_out) std::remove(out.c_str());
       return why;
     };
-    if (std::rename(staged.c_str(), out.c_str()) != 0) {
-      const std::string why = std::strerror(errno);
-      throw fail(out, put_back(why));
-    }
-    if (std::rename(staged_summary.c_str(), summary.c_str()) != 0) {
-      const std::string why = std::strerror(errno);
-      throw fail(summary, put_back(why));
-    }
+    for (const auto& [from, to] : {std::pair{staged, out}, std::pair{staged_summary, summary}})
+      if (std::rename(from.c_str(), to.c_str()) != 0) {
+        const std::string why = std::strerror(errno);
+        throw fail(to, put_back(why));
+      }
     if (had_out) std::remove(previous.c_str());
     std::cout << "wrote " << trajectory.size() << " poses to " << out << " and the summary to "
               << summary << " (" << run.keyframes.size() << " keyframes, " << failed
