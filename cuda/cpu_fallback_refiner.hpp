@@ -1,18 +1,15 @@
-// A GPU refiner with the CPU one behind it: a CudaError from the GPU (a kernel fault leaves the
-// CUDA context unusable for the whole process; out of memory on a larger frame) sends that
-// refinement, and every later one, to the CPU, with one line on the log. Without it every later
-// pair would end in the `error` verdict and keep the front end's poses. Bad input
-// (std::invalid_argument) is the caller's and passes through.
+// A GPU refiner with the CPU one behind it (CpuFallback, cpu_fallback.hpp): a device failure
+// sends the refinement to the CPU instead of ending it in the `error` verdict with the front
+// end's poses; out of device memory that one refinement, any other failure every later one too.
 #pragma once
 
-#include <atomic>
 #include <memory>
-#include <mutex>
 #include <ostream>
 #include <string>
 #include <vector>
 
 #include "jpcr/backend/refiner.hpp"
+#include "jpcr/cuda/cpu_fallback.hpp"
 
 namespace jpcr {
 
@@ -27,14 +24,14 @@ class CpuFallbackRefiner final : public Refiner {
   std::string name() const override { return gpu_->name(); }
   const JointParams& params() const override { return gpu_->params(); }
   bool refines_quadrics() const override { return gpu_->refines_quadrics(); }
-  /// True once a GPU failure sent the refinements to the CPU.
-  bool on_cpu() const { return failed_; }
+  /// True once a GPU failure sent every later refinement to the CPU.
+  bool on_cpu() const { return fallback_.on_cpu(); }
+  /// Refinements that ran on the CPU because the device was out of memory.
+  int out_of_memory_calls() const { return fallback_.out_of_memory_calls(); }
 
  private:
   std::unique_ptr<Refiner> gpu_, cpu_;
-  std::ostream& log_;
-  mutable std::atomic<bool> failed_{false};
-  mutable std::once_flag logged_;
+  CpuFallback fallback_;
 };
 
 }  // namespace jpcr

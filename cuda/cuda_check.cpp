@@ -12,7 +12,8 @@ namespace {
 [[noreturn]] void throw_cuda_error(cudaError_t error, const std::string& what, const char* file,
                                    int line) {
   throw CudaError("jpcr: CUDA " + what + " failed at " + file + ":" + std::to_string(line) + ": " +
-                  cudaGetErrorName(error) + " (" + cudaGetErrorString(error) + ")");
+                      cudaGetErrorName(error) + " (" + cudaGetErrorString(error) + ")",
+                  error == cudaErrorMemoryAllocation);
 }
 
 }  // namespace

@@ -11,9 +11,17 @@ struct CUstream_st;  // cudaStream_t is CUstream_st*
 namespace jpcr {
 
 /// A failed CUDA call or kernel launch, or a CUDA device that was asked for and is not there.
+/// out_of_memory(): a cudaMalloc the device could not serve. That error is not sticky: the
+/// context stays usable, and a later call with less memory in use may succeed. Every other
+/// failure is treated as the loss of the device for the process (a kernel fault is sticky).
 class CudaError : public std::runtime_error {
  public:
-  explicit CudaError(const std::string& what) : std::runtime_error(what) {}
+  explicit CudaError(const std::string& what, bool out_of_memory = false)
+      : std::runtime_error(what), out_of_memory_(out_of_memory) {}
+  bool out_of_memory() const { return out_of_memory_; }
+
+ private:
+  bool out_of_memory_;
 };
 
 /// Throws CudaError unless `code` (a cudaError_t) is cudaSuccess.

@@ -1,5 +1,7 @@
 #include "jpcr/cuda/curvature_estimator_factory.hpp"
 
+#include "jpcr/cuda/cpu_fallback_estimator.hpp"
+
 #if defined(JPCR_HAVE_CUDA)
 #include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/cuda_quadric_fit.hpp"
@@ -15,7 +17,8 @@ std::unique_ptr<CurvatureEstimator> make_curvature_estimator(ComputeDevice devic
 #if defined(JPCR_HAVE_CUDA)
   if (chosen == ComputeDevice::kCuda) {
     try {
-      return std::make_unique<CudaQuadricFit>(params);
+      return std::make_unique<CpuFallbackEstimator>(std::make_unique<CudaQuadricFit>(params),
+                                                    std::make_unique<QuadricFit>(params), log);
     } catch (const CudaError& e) {
       fall_back_to_cpu_or_rethrow(device, e, log);
     }

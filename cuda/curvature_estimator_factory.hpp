@@ -11,6 +11,8 @@
 namespace jpcr {
 
 /// Resolves `device` (one line on `log`, device_selection.hpp) and builds the Quad IT estimator.
+/// The GPU one comes in a CpuFallbackEstimator: a device failure mid-run moves frames to the
+/// CPU (cpu_fallback.hpp); `log` must outlive the estimator.
 std::unique_ptr<CurvatureEstimator> make_curvature_estimator(ComputeDevice device,
                                                              const QuadricParams& params,
                                                              std::ostream& log);

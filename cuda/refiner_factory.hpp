@@ -15,7 +15,7 @@ namespace jpcr {
 /// As make_refiner(name, params) (refiner.hpp), with one line on `log` saying where it runs.
 /// Throws InputError for an unknown name and CudaError when cuda is requested for j-ftf
 /// without a usable GPU. The GPU J-ftf comes in a CpuFallbackRefiner: a device failure during a
-/// run sends it to the CPU (one more line on `log`).
+/// run sends refinements to the CPU (cpu_fallback.hpp; one more line on `log`).
 std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams& params,
                                       ComputeDevice device, std::ostream& log);
 

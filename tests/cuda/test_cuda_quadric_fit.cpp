@@ -10,10 +10,13 @@
 #include <cstdio>
 #include <cstring>
 #include <sstream>
+#include <string>
 
 #include <gtest/gtest.h>
 
 #include "cuda/random_frames.hpp"
+#include "jpcr/cuda/cpu_fallback_estimator.hpp"
+#include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/cuda_quadric_fit.hpp"
 #include "jpcr/cuda/curvature_estimator_factory.hpp"
 
@@ -99,6 +102,27 @@ Parity compare_with_reference(const QuadricMap& gpu, const VertexMap& vertices,
   p.rms = valid_both > 0 ? std::sqrt(sum / (2.0 * valid_both)) : NAN;
   p.rms_rest = valid_both > 0 ? std::sqrt(sum_rest / (2.0 * valid_both)) : NAN;
   return p;
+}
+
+// CpuFallback (cpu_fallback.hpp) retries the GPU after an allocation failure only: that is the
+// one error cuda_check marks out_of_memory. Needs no device (the codes are cudaError_t values).
+TEST(CudaCheck, OnlyAnAllocationFailureIsOutOfMemory) {
+  const auto out_of_memory = [](int code) {
+    try {
+      cuda_check(code, "cudaMalloc(&p, n)", "here.cu", 7);
+    } catch (const CudaError& e) {
+      EXPECT_NE(std::string(e.what()).find("call cudaMalloc(&p, n) failed at here.cu:7"),
+                std::string::npos)
+          << e.what();
+      return e.out_of_memory();
+    }
+    ADD_FAILURE() << "code " << code << " did not throw";
+    return false;
+  };
+  EXPECT_TRUE(out_of_memory(2));     // cudaErrorMemoryAllocation
+  EXPECT_FALSE(out_of_memory(1));    // cudaErrorInvalidValue
+  EXPECT_FALSE(out_of_memory(700));  // cudaErrorIllegalAddress: sticky
+  EXPECT_NO_THROW(cuda_check(0, "cudaFree(p)", "here.cu", 8));
 }
 
 TEST(CudaQuadricFit, MatchesTheReferenceKernelOnRandomFrames) {
@@ -221,6 +245,12 @@ TEST(CudaQuadricFit, TheFactoryGivesTheGpuEstimatorForCuda) {
   const SyntheticFrame f = test::random_frame(test::test_seed(), 160, 120);
   const QuadricMap map = estimator->estimate(compute_vertex_map(f.frame.depth, f.frame.camera));
   EXPECT_GT(map.valid_count(), map.status.size() / 3);
+  // It ran on the GPU, not on the CPU behind it.
+  const auto* wrapped = dynamic_cast<const CpuFallbackEstimator*>(estimator.get());
+  ASSERT_NE(wrapped, nullptr);
+  EXPECT_FALSE(wrapped->on_cpu());
+  EXPECT_EQ(wrapped->out_of_memory_calls(), 0);
+  EXPECT_EQ(log.str().find("on the GPU"), std::string::npos) << log.str();
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 
 #include "jpcr/backend/joint_frame_to_frame.hpp"
 #include "jpcr/backend/joint_window.hpp"
+#include "jpcr/cuda/cpu_fallback_estimator.hpp"
 #include "jpcr/cuda/cpu_fallback_refiner.hpp"
 #include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/curvature_estimator_factory.hpp"
@@ -151,6 +152,149 @@ TEST(CpuFallbackRefiner, ADeviceFailureMovesTheRefinementsToTheCpu) {
                std::invalid_argument);
   EXPECT_FALSE(strict.on_cpu());
   EXPECT_EQ(unused, 0);
+}
+
+// What a scripted device does on each call, in order; calls past the script succeed.
+enum class Outcome { kOk, kOutOfMemory, kFault };
+
+void play(const std::vector<Outcome>& script, int call) {
+  const Outcome o = call < static_cast<int>(script.size()) ? script[call] : Outcome::kOk;
+  if (o == Outcome::kOutOfMemory)
+    throw CudaError("cudaMalloc: cudaErrorMemoryAllocation", /*out_of_memory=*/true);
+  if (o == Outcome::kFault) throw CudaError("kernel: cudaErrorIllegalAddress");
+}
+
+class SequencedRefiner final : public Refiner {
+ public:
+  SequencedRefiner(std::string label, std::vector<Outcome> script)
+      : label_(std::move(label)), script_(std::move(script)) {}
+  using Refiner::refine;
+  RefinementResult refine(const std::vector<VertexMap>&, const CameraIntrinsics&,
+                          const std::vector<Eigen::Isometry3d>&, const QuadricMap&) const override {
+    play(script_, calls++);
+    RefinementResult r;
+    r.report.method = label_;
+    return r;
+  }
+  std::string name() const override { return "j-ftf"; }
+  const JointParams& params() const override { return params_; }
+  mutable int calls = 0;
+
+ private:
+  std::string label_;
+  std::vector<Outcome> script_;
+  JointParams params_;
+};
+
+std::vector<std::string> refine_times(const Refiner& refiner, int n) {
+  std::vector<std::string> ran;
+  for (int i = 0; i < n; ++i)
+    ran.push_back(refiner.refine(std::vector<VertexMap>{}, CameraIntrinsics{}, {}, QuadricMap{})
+                      .report.method);
+  return ran;
+}
+
+// Out of device memory is not sticky: only that refinement runs on the CPU, the next one tries
+// the GPU again; said once.
+TEST(CpuFallbackRefiner, OutOfMemoryMovesOnlyThatRefinementToTheCpu) {
+  std::ostringstream log;
+  auto gpu = std::make_unique<SequencedRefiner>(
+      "gpu", std::vector<Outcome>{Outcome::kOutOfMemory, Outcome::kOk, Outcome::kOutOfMemory});
+  const SequencedRefiner& device = *gpu;
+  const CpuFallbackRefiner refiner(
+      std::move(gpu), std::make_unique<SequencedRefiner>("cpu", std::vector<Outcome>{}), log);
+  EXPECT_EQ(refine_times(refiner, 4), (std::vector<std::string>{"cpu", "gpu", "cpu", "gpu"}));
+  EXPECT_EQ(device.calls, 4);
+  EXPECT_FALSE(refiner.on_cpu());
+  EXPECT_EQ(refiner.out_of_memory_calls(), 2);
+  EXPECT_EQ(lines(log.str()), 1) << log.str();
+  EXPECT_NE(log.str().find("j-ftf on the GPU ran out of device memory (cudaMalloc: "
+                           "cudaErrorMemoryAllocation); this call runs on the cpu and the next "
+                           "tries the GPU again"),
+            std::string::npos)
+      << log.str();
+}
+
+// A device that stays out of memory is given up after kMaxOutOfMemoryInARow failures in a row,
+// with a second line; a success in between resets the count.
+TEST(CpuFallbackRefiner, OutOfMemoryInARowMovesTheRefinementsToTheCpuForGood) {
+  std::ostringstream log;
+  const auto oom = Outcome::kOutOfMemory;
+  auto gpu = std::make_unique<SequencedRefiner>(
+      "gpu", std::vector<Outcome>{oom, oom, Outcome::kOk, oom, oom, oom, Outcome::kOk});
+  const SequencedRefiner& device = *gpu;
+  const CpuFallbackRefiner refiner(
+      std::move(gpu), std::make_unique<SequencedRefiner>("cpu", std::vector<Outcome>{}), log);
+  static_assert(CpuFallback::kMaxOutOfMemoryInARow == 3, "the script assumes 3");
+  EXPECT_EQ(refine_times(refiner, 8),
+            (std::vector<std::string>{"cpu", "cpu", "gpu", "cpu", "cpu", "cpu", "cpu", "cpu"}));
+  EXPECT_EQ(device.calls, 6);
+  EXPECT_TRUE(refiner.on_cpu());
+  EXPECT_EQ(refiner.out_of_memory_calls(), 5);
+  EXPECT_EQ(lines(log.str()), 2) << log.str();
+  EXPECT_NE(log.str().find("j-ftf on the GPU ran out of device memory 3 times in a row; it runs "
+                           "on the cpu from here on"),
+            std::string::npos)
+      << log.str();
+}
+
+class SequencedEstimator final : public CurvatureEstimator {
+ public:
+  SequencedEstimator(std::string label, std::vector<Outcome> script)
+      : label_(std::move(label)), script_(std::move(script)) {}
+  QuadricMap estimate(const VertexMap&) const override {
+    play(script_, calls++);
+    ran.push_back(label_ + " without normals");
+    return QuadricMap{};
+  }
+  QuadricMap estimate(const VertexMap&, const NormalMap&) const override {
+    play(script_, calls++);
+    ran.push_back(label_ + " with normals");
+    return QuadricMap{};
+  }
+  std::string name() const override { return label_; }
+  const QuadricParams& params() const override { return params_; }
+  mutable int calls = 0;
+  mutable std::vector<std::string> ran;
+
+ private:
+  std::string label_;
+  std::vector<Outcome> script_;
+  QuadricParams params_;
+};
+
+// The GPU Quad IT mid-run: out of memory sends one frame to the CPU, a fault every later one;
+// both overloads go the same way, to the same overload on the CPU.
+TEST(CpuFallbackEstimator, ADeviceFailureMidRunMovesFramesToTheCpu) {
+  std::ostringstream log;
+  auto gpu = std::make_unique<SequencedEstimator>(
+      "quad-it-cuda",
+      std::vector<Outcome>{Outcome::kOutOfMemory, Outcome::kOk, Outcome::kFault, Outcome::kOk});
+  auto cpu = std::make_unique<SequencedEstimator>("quad-it", std::vector<Outcome>{});
+  const SequencedEstimator& device = *gpu;
+  const SequencedEstimator& host = *cpu;
+  const CpuFallbackEstimator estimator(std::move(gpu), std::move(cpu), log);
+  EXPECT_EQ(estimator.name(), "quad-it-cuda");
+  const VertexMap vertices;
+  const NormalMap normals;
+  estimator.estimate(vertices);
+  estimator.estimate(vertices, normals);
+  EXPECT_FALSE(estimator.on_cpu());
+  estimator.estimate(vertices, normals);
+  EXPECT_TRUE(estimator.on_cpu());
+  estimator.estimate(vertices);
+  EXPECT_EQ(device.calls, 3);
+  EXPECT_EQ(device.ran, (std::vector<std::string>{"quad-it-cuda with normals"}));
+  EXPECT_EQ(host.ran, (std::vector<std::string>{"quad-it without normals", "quad-it with normals",
+                                                "quad-it without normals"}));
+  EXPECT_EQ(estimator.out_of_memory_calls(), 1);
+  EXPECT_EQ(lines(log.str()), 2) << log.str();
+  EXPECT_NE(log.str().find("quad-it on the GPU ran out of device memory"), std::string::npos)
+      << log.str();
+  EXPECT_NE(log.str().find("quad-it on the GPU failed (kernel: cudaErrorIllegalAddress); it runs "
+                           "on the cpu from here on"),
+            std::string::npos)
+      << log.str();
 }
 
 TEST(DeviceSelection, CudaWithoutAGpuIsAClearError) {
