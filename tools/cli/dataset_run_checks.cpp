@@ -11,8 +11,12 @@ namespace jpcr::cli {
 void check_dataset_run(const Arguments& args, const FrameSource& dataset,
                        const QuadricParams& quadric) {
   require_output_apart_from(args.get("out"), args.get("dataset"), "--dataset");
+  check_quadric_pattern(args, quadric, dataset.camera().width);
+}
+
+void check_quadric_pattern(const Arguments& args, const QuadricParams& quadric, int width) {
   try {
-    quadric.pattern_for(dataset.camera().width);
+    quadric.pattern_for(width);
   } catch (const InputError& e) {
     const bool file = args.has("params") && !args.get("params").empty();
     throw InputError((file ? args.get("params") : std::string("the built-in parameters")) +

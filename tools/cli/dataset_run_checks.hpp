@@ -10,11 +10,14 @@
 namespace jpcr::cli {
 
 /// Throws InputError when --out is the --dataset directory itself (writing there would replace
-/// the dataset's own curvature/ ground truth), or when the quadric pattern cannot be scaled to
-/// the dataset's width or then has fewer samples than min_samples (named with the --params
-/// file, or "the built-in parameters").
+/// the dataset's own curvature/ ground truth), or when check_quadric_pattern refuses the
+/// dataset's width.
 void check_dataset_run(const Arguments& args, const FrameSource& dataset,
                        const QuadricParams& quadric);
+
+/// Throws InputError when the quadric pattern cannot be scaled to images `width` px wide or then
+/// has fewer samples than min_samples, named with the --params file or "the built-in parameters".
+void check_quadric_pattern(const Arguments& args, const QuadricParams& quadric, int width);
 
 /// Throws InputError when --dataset, --config or --params lies in one of the entries of OUT
 /// that `out` replaces (StagedOutput::require_apart_from).

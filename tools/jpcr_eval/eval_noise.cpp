@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "cli/arguments.hpp"
+#include "cli/dataset_run_checks.hpp"
 #include "cli/device_option.hpp"
 #include "jpcr/cuda/refiner_factory.hpp"
 #include "jpcr/frontend/frame_pyramid.hpp"
@@ -359,6 +360,7 @@ int run_noise(int argc, char** argv) {
     o.width = width;
     o.height = height;
     o.seed = static_cast<std::uint64_t>(args.get_int("walk-seed"));
+    if (method != "icp-ftf") cli::check_quadric_pattern(args, params.joint.quadric, width);
     const SyntheticSequence sequence = make_synthetic_sequence(o);
     const CameraIntrinsics& camera = sequence.camera();
     const Eigen::Isometry3d first = *sequence.ground_truth(static_cast<std::size_t>(step));
