@@ -157,6 +157,14 @@ DdsDepthSubscriber::DdsDepthSubscriber(const DdsParticipant& participant, const 
 
 DdsDepthSubscriber::~DdsDepthSubscriber() = default;
 
+std::size_t DdsDepthSubscriber::frames_waiting() const {
+  State& s = *state_;
+  const std::lock_guard<std::mutex> lock(s.mutex);
+  return s.frames.size() + static_cast<std::size_t>(std::count_if(
+                               s.images.begin(), s.images.end(),
+                               [](const ReceivedImage& r) { return r.problem.empty(); }));
+}
+
 int DdsDepthSubscriber::matched() const {
   return state_->depth.matched();
 }
@@ -261,7 +269,6 @@ void DdsDepthSubscriber::process() {
         it = s.images.erase(it);
       }
     }
-    dropped = s.dropped;
   }
   for (const ReceivedImage& r : images) {
     if (!r.problem.empty()) {
@@ -289,6 +296,18 @@ void DdsDepthSubscriber::process() {
     } catch (const InputError& e) {
       reject(config_.depth_topic, e.what());
     }
+  }
+  // Decoded frames wait for the caller under the same KEEP_LAST bound as the received images: a
+  // caller slower than the camera gets the newest, the oldest go, counted.
+  std::size_t stale = 0;
+  for (; s.frames.size() > s.queue_depth; ++stale) {
+    s.frames.pop_front();
+    s.frame_ids.pop_front();
+  }
+  {
+    const std::lock_guard<std::mutex> lock(s.mutex);
+    s.dropped += stale;
+    dropped = s.dropped;
   }
   // Samples Cyclone itself knows it lost on the way (e.g. gone from the writer's history before
   // a retransmission): counted as dropped too.

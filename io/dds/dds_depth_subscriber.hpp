@@ -5,9 +5,10 @@
 // many were left out), and reception goes on.
 //
 // Samples are taken from Cyclone as they arrive (a listener on Cyclone's receive thread) into a
-// queue of at most image_history_depth images, the KEEP_LAST depth of the input QoS: when the
-// caller is slower than the camera, the oldest waiting image is dropped, counted
-// (frames_dropped()) and logged, never lost silently in the reader's history.
+// queue of at most image_history_depth images, the KEEP_LAST depth of the input QoS, and decoded
+// frames wait for the caller under the same bound: when the caller is slower than the camera,
+// the oldest waiting image is dropped, counted (frames_dropped()) and logged, never lost silently
+// in the reader's history nor kept to pile up behind the caller.
 //
 // The depth is used as received: it must be rectified (a driver's image_rect topic; what
 // jpcr_dds_play publishes is), and its intrinsics are the camera_info's P, the rectified
@@ -57,6 +58,8 @@ class DdsDepthSubscriber {
   /// Depth images dropped from the full queue before the caller asked for them, plus those
   /// Cyclone reports lost in transport (sample lost status).
   std::size_t frames_dropped() const;
+  /// Frames received and not yet returned by wait_frame (at a stop: left unprocessed).
+  std::size_t frames_waiting() const;
   /// Publishers matched on the depth topic.
   int matched() const;
 

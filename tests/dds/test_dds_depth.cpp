@@ -322,5 +322,37 @@ TEST_F(DdsDepth, FramesTheCallerIsTooSlowForAreDroppedCountedAndLogged) {
       << log.str();
 }
 
+// A caller that takes one frame for every two the camera sends: the frames waiting for it stay
+// within the queue's bound (keep last 2) instead of piling up, and each frame is either
+// returned or counted as dropped.
+TEST_F(DdsDepth, FramesWaitingForASlowCallerStayWithinTheQueue) {
+  ASSERT_EQ(config_.image_history_depth, 2);
+  std::ostringstream log;
+  DdsDepthSubscriber subscriber(node_side_, config_, &log);
+  DdsDepthPublisher publisher(camera_side_, config_, DepthEncoding::kMetres32);
+  ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
+  constexpr int kRounds = 5;
+  std::vector<double> stamps;
+  for (int round = 0; round < kRounds; ++round) {
+    for (int i = 0; i < 2; ++i) {
+      publisher.publish(test_frame(1.0 + 2 * round + i));
+      ASSERT_TRUE(publisher.flush(kTimeout));
+    }
+    std::this_thread::sleep_for(milliseconds(200));  // in the listener's queue
+    const std::optional<Frame> f = subscriber.wait_frame(milliseconds(300));
+    ASSERT_TRUE(f.has_value()) << "round " << round;
+    stamps.push_back(f->timestamp);
+  }
+  EXPECT_LE(subscriber.frames_waiting(), 2u);
+  std::vector<double> left;
+  while (const std::optional<Frame> f = subscriber.wait_frame(milliseconds(300)))
+    left.push_back(f->timestamp);
+  EXPECT_LE(left.size(), 2u);  // without the bound: 5
+  EXPECT_EQ(stamps.size() + left.size() + subscriber.frames_dropped(), std::size_t{2 * kRounds});
+  EXPECT_EQ(subscriber.frames_waiting(), 0u);
+  ASSERT_FALSE(left.empty());
+  EXPECT_DOUBLE_EQ(left.back(), 2.0 * kRounds) << "the oldest go, the newest stays";
+}
+
 }  // namespace
 }  // namespace jpcr

@@ -123,10 +123,14 @@ Outcome receive(const StopRules& rules, Next&& next, OnInput&& on_input) {
   return out;
 }
 
-/// "rejected R samples, dropped D frames" of a depth subscriber.
+/// "rejected R samples, dropped D frames" of a depth subscriber, and ", W frames left
+/// unprocessed" when a stop left frames received but not taken.
 inline std::string input_summary(const DdsDepthSubscriber& subscriber) {
-  return "rejected " + std::to_string(subscriber.samples_rejected()) + " samples, dropped " +
-         std::to_string(subscriber.frames_dropped()) + " frames";
+  std::string s = "rejected " + std::to_string(subscriber.samples_rejected()) +
+                  " samples, dropped " + std::to_string(subscriber.frames_dropped()) + " frames";
+  if (const std::size_t waiting = subscriber.frames_waiting(); waiting > 0)
+    s += ", " + std::to_string(waiting) + " frames left unprocessed";
+  return s;
 }
 
 /// One progress line per input: rewritten in place on a terminal; in a log inputs 1-10, then
