@@ -156,6 +156,38 @@ else
 fi
 kill -INT $kf_echo; wait_bounded $kf_echo 10
 
+# A side killed mid-stream (kill -9: no end of stream, no goodbye; Cyclone unmatches it when its
+# lease runs out, 10 s): the back end finishes what it has and exits 1 naming the cause; the
+# front end stops sending keyframes and exits 1 (both used to wait for ever or report success).
+# Each is killed once the back end has refined the first keyframe, before the front end's
+# --idle-timeout (15 s after its last frame) would end the stream. (After its end of stream the
+# front end cannot tell a back end that crashed from one that finished: both go.)
+dds2=(--params "$tmp/params.yaml" --domain $((domain + 1)))
+for victim in back front; do
+  "$node" --role backend "${dds2[@]}" "${method[@]}" > "$tmp/gone_back.txt" 2>&1 &
+  back_pid=$!; pids+=($back_pid)
+  sleep 1
+  "$node" --role frontend "${dds2[@]}" "${method[@]}" --idle-timeout 15 > "$tmp/gone_front.txt" 2>&1 &
+  front_pid=$!; pids+=($front_pid)
+  sleep 1
+  expect 0 "published 4 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 --frames 0:4 \
+    --as-fast-as-possible --wait-subscribers 15 "${dds2[@]}"
+  for _ in $(seq 300); do grep -q "keyframe 1 " "$tmp/gone_back.txt" && break; sleep 0.1; done
+  if [ $victim = back ]; then
+    kill -KILL $back_pid; wait_bounded $front_pid 60; rc=$?
+    out=$tmp/gone_front.txt want="went away; of the .* keyframes sent, those after it stopped are lost"
+  else
+    kill -KILL $front_pid; wait_bounded $back_pid 60; rc=$?
+    out=$tmp/gone_back.txt want="error: the front end went away after .* frames without its end of stream"
+  fi
+  if [ $rc = 1 ] && grep -q "$want" "$out"; then
+    echo "ok: the $victim end killed: $(grep -m1 "$want" "$out")"
+  else
+    echo "FAIL: the $victim end killed: the other exited $rc"; cat "$tmp/gone_back.txt" "$tmp/gone_front.txt"; fail=1
+  fi
+  kill -KILL $back_pid $front_pid 2>/dev/null; wait $back_pid $front_pid 2>/dev/null
+done
+
 expect 2 "--role must be all, frontend or backend, got 'middle'" -- "$node" --role middle
 expect 2 "--backend-wait must be >= 0" -- "$node" --role frontend --backend-wait -1
 exit ${fail:-0}

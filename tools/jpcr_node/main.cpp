@@ -97,17 +97,41 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
   bool waiting = false;
   std::size_t waits = 0;
   double waited_total = 0.0;
+  // A back end that took keyframes and is no longer matched (it crashed or was killed; Cyclone
+  // notices when its lease runs out) cannot chain later ones: they are not sent, the run ends
+  // with exit 1, odom goes on until then.
+  bool had_back_end = false;
+  std::string back_end_gone;
+  const auto back_end_went_away = [&] {
+    if (!back_end_gone.empty()) return true;
+    if (keyframes.matched() > 0) {
+      had_back_end = true;
+      return false;
+    }
+    if (!had_back_end) return false;
+    back_end_gone = "the back end on " + keyframe_topic_name(o.dds) + " went away; of the " +
+                    std::to_string(sent) + " keyframes sent, those after it stopped are lost";
+    std::cerr << "jpcr_node: error: " << back_end_gone
+              << "; later keyframes are not sent (restart both to refine again)\n";
+    return true;
+  };
   const auto wait_for_back_end = [&](double) {
+    if (back_end_went_away()) return false;
     if (!waiting && waits++ == 0)
-      std::cerr << "jpcr_node: the back end holds " << o.dds.keyframe_queue
+      std::cerr << "jpcr_node: the back end has " << o.dds.keyframe_queue
                 << " keyframes unread (dds.keyframe_queue); waiting for it\n";
     waiting = true;
     return !cli::stop_requested();
   };
+  node::StopRules stop = o.stop;
+  stop.source_gone = [&] {  // said as soon as it is seen, also while no frame comes; odom goes on
+    back_end_went_away();
+    return std::string();
+  };
   node::StampOrder order;  // live frames in time order
   node::Progress progress;
   const node::Outcome outcome = node::receive(
-      o.stop, [&](auto slice) { return subscriber.wait_frame(slice); },
+      stop, [&](auto slice) { return subscriber.wait_frame(slice); },
       [&](const Frame& frame) {
         order.take(frame.timestamp);
         results.set_camera_frame_id(subscriber.frame_id());
@@ -117,7 +141,9 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
         results.publish_odometry(
             f.front_end,
             position_rotation_covariance(f.pose_covariance, f.front_end.pose.translation()));
-        if (!keyframe) {
+        if (back_end_went_away()) {
+          tracked.clear();
+        } else if (!keyframe) {
           tracked.push_back(f.front_end);
         } else {
           if (sent == 0 &&
@@ -143,6 +169,15 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
       });
   progress.done();
   std::cerr << "jpcr_node: " << node::rate_summary(outcome, "frames") << '\n';
+  if (back_end_went_away()) {
+    if (!results.flush(o.flush_timeout))
+      std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
+    std::cout << "processed " << outcome.processed << " frames, sent " << sent
+              << " keyframes, not the end of stream (" << back_end_gone << "); "
+              << node::input_summary(subscriber) << ", skipped " << outcome.skipped
+              << " frames; stopped by " << outcome.reason << '\n';
+    return 1;
+  }
   // The end of stream, and the back end's acknowledgement of every keyframe, wait as a keyframe
   // does; after a signal, --flush-timeout at most.
   const auto wait_to_end = [&](double waited) {
@@ -152,7 +187,9 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
   const auto start = node::Clock::now();
   const bool ended =
       keyframes.publish_end(static_cast<int>(outcome.processed), tracked, wait_to_end);
-  if (!ended)
+  if (!ended && !back_end_gone.empty())
+    std::cerr << "jpcr_node: end of stream not sent\n";
+  else if (!ended)
     std::cerr << "jpcr_node: the back end took no keyframe within --flush-timeout after the signal;"
                  " end of stream not sent\n";
   bool flushed = ended && keyframes.flush(wait_to_end) && results.flush(o.flush_timeout);
@@ -174,7 +211,7 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
                       : " keyframes, not the end of stream; ")
             << node::input_summary(subscriber) << ", skipped " << outcome.skipped
             << " frames; stopped by " << outcome.reason << '\n';
-  return 0;
+  return back_end_gone.empty() ? 0 : 1;  // gone while it ended: said above
 }
 
 // The back-end process: keyframes in, J-ftf / J-full, re-anchoring, results out.
@@ -190,6 +227,21 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
       device_refiner_factory(o.device, std::cerr));
   node::StopRules stop = o.stop;
   stop.max_items = 0;  // --max-frames belongs to the front end; its end of stream stops us
+  // A front end that sent keyframes and is no longer matched without its end of stream (it
+  // crashed or was killed; Cyclone notices when its lease runs out) sends no more: the back end
+  // finishes what it has, publishes it and exits 1.
+  bool had_front_end = false;
+  std::string front_end_gone;
+  stop.source_gone = [&]() -> std::string {
+    if (reader.matched() > 0) {
+      had_front_end = true;
+      return {};
+    }
+    if (!had_front_end) return {};
+    front_end_gone = "the front end went away after " + std::to_string(back_end->frame_count()) +
+                     " frames without its end of stream";
+    return "the front end going away";
+  };
   node::Progress progress;
   // Each keyframe message continues the chain of the ones before it. Once one is lost (never
   // received, or refused: another camera), no later one can be chained to what was refined, so
@@ -242,6 +294,10 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
             << " samples not published); rejected " << reader.samples_rejected()
             << " samples, skipped " << outcome.skipped << " messages; stopped by " << outcome.reason
             << '\n';
+  if (!front_end_gone.empty()) {
+    std::cerr << "jpcr_node: error: " << front_end_gone << "; the back end stopped there\n";
+    return 1;
+  }
   if (lost.empty()) return 0;
   std::cerr << "jpcr_node: error: " << lost << "; the back end stopped there\n";
   return 1;

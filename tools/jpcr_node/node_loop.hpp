@@ -8,8 +8,10 @@
 #include <chrono>
 #include <cstddef>
 #include <cstdio>
+#include <functional>
 #include <iostream>
 #include <string>
+#include <utility>
 
 #include "cli/stop_signal.hpp"
 #include "jpcr/backend/pipeline_back_end.hpp"
@@ -29,6 +31,9 @@ inline double seconds_since(Clock::time_point t) {
 struct StopRules {
   int max_items = 0;          // stop after this many processed inputs (0: no limit)
   double idle_timeout = 0.0;  // s without a processed input after the first one (0: never)
+  /// Asked whenever no input is waiting: a non-empty answer stops the loop with it as the reason
+  /// (the back end's front end went away).
+  std::function<std::string()> source_gone;
 };
 
 enum class Step { kProcessed, kEndOfStream };
@@ -99,7 +104,16 @@ Outcome receive(const StopRules& rules, Next&& next, OnInput&& on_input) {
       break;
     }
     auto input = next(kSlice);
-    if (!input) continue;
+    if (!input) {
+      if (rules.source_gone) {
+        std::string gone = rules.source_gone();
+        if (!gone.empty()) {
+          out.reason = std::move(gone);
+          break;
+        }
+      }
+      continue;
+    }
     const Clock::time_point arrived = Clock::now();
     try {
       const Step step = on_input(*input);
