@@ -104,9 +104,14 @@ wait_bounded $reset_echo 30
 n=$(grep -c "^odom .* child=robot1/depth_optical" "$tmp/reset_odom.txt")
 [ "$n" = 2 ] || { echo "FAIL: $n of 2 odom in the camera's frame"; cat "$tmp/reset_odom.txt"; fail=1; }
 # keep_history: false, an unattended run: J-full windows of 3 (every frame a keyframe) forget
-# each final frame, and every keyframe's map is still published.
+# each final frame, and every keyframe's map is still published. Each final pose is published
+# once, in the first path after it became final: together the paths hold every frame's final
+# pose, equal to jpcr_run's (the node published only the frames still held: 1 of 6).
 printf 'dds:\n  history_depth: 32\n  image_history_depth: 16\npipeline:\n  keep_history: false\n  window: 3\n' \
   > "$tmp/forget.yaml"
+expect 0 "j-full " -- "$run" --dataset "$tmp/seq" --method j-full --window 3 --out "$tmp/off_full"
+"$echo_bin" rt/jpcr/path "${dds[@]}" --tum --timeout 240 > "$tmp/forget_path.txt" 2>&1 &
+forget_echo=$!; pids+=($forget_echo)
 "$node" --params "$tmp/forget.yaml" --domain $domain --method j-full --max-frames 6 \
   --idle-timeout 60 > "$tmp/forget.txt" 2>&1 &
 forget_pid=$!; pids+=($forget_pid)
@@ -114,6 +119,30 @@ expect 0 "published 6 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 \
   --as-fast-as-possible --wait-subscribers 15 "${dds[@]}"
 expect_node $forget_pid 200 "$tmp/forget.txt" "processed 6 frames, 6 keyframes, 6 curvature maps" \
   "keep_history false"
+kill -INT $forget_echo; wait_bounded $forget_echo 10
+/usr/bin/python3 - "$tmp/forget_path.txt" "$tmp/off_full/trajectory.txt" <<'PY' || fail=1
+import sys
+def pose(line):
+    return [float(x) for x in line.split()]
+final = {}  # stamp -> the last pose any path gave it
+for l in open(sys.argv[1]).read().splitlines():
+    if l.strip() and not l.startswith(("#", "path ")):
+        p = pose(l)
+        final[round(p[0], 6)] = p
+want = [pose(l) for l in open(sys.argv[2]) if l.strip() and not l.startswith("#")]
+missing = [w[0] for w in want if round(w[0], 6) not in final]
+if missing:
+    sys.exit("FAIL: keep_history false: no path held the frames stamped %s" % missing)
+worst = 0.0
+for w in want:
+    g = final[round(w[0], 6)]
+    s = 1.0 if sum(a * b for a, b in zip(g[4:], w[4:])) >= 0 else -1.0
+    worst = max([worst] + [abs(a - b) for a, b in zip(g[1:4], w[1:4])] +
+                [abs(s * a - b) for a, b in zip(g[4:], w[4:])])
+if worst > 1e-9:
+    sys.exit("FAIL: keep_history false: final poses differ from jpcr_run's by %g" % worst)
+print("ok: keep_history false: the paths held all %d final poses, equal to %g" % (len(want), worst))
+PY
 "$node" "${dds[@]}" > "$tmp/term.txt" 2>&1 &
 term_pid=$!; pids+=($term_pid)
 sleep 1.5; kill -TERM $term_pid

@@ -1,8 +1,24 @@
 #include "cli/pipeline_publisher.hpp"
 
+#include <utility>
+
 #include "jpcr/io/curvature_colors.hpp"
 
 namespace jpcr::cli {
+
+void PipelinePublisher::attach(PipelineBackEnd& pipeline) {
+  if (pipeline.params().keep_history) return;  // trajectory() holds every frame
+  pipeline.set_frame_sink([this](const PipelineFrame&, const StampedPose& refined,
+                                 const FrameVerdicts&) { final_since_path_.push_back(refined); });
+}
+
+void PipelinePublisher::publish_path(const PipelineBackEnd& pipeline) {
+  Trajectory path = std::move(final_since_path_);
+  final_since_path_.clear();
+  const Trajectory held = pipeline.trajectory();
+  path.insert(path.end(), held.begin(), held.end());
+  publisher_.publish_path(path);
+}
 
 void PipelinePublisher::keyframe_final(const PipelineBackEnd& pipeline, int keyframe,
                                        const QuadricMap& quadrics) {
@@ -23,11 +39,11 @@ void PipelinePublisher::frame_added(const PipelineBackEnd& pipeline, const Pipel
 void PipelinePublisher::path_if_refined(const PipelineBackEnd& pipeline) {
   if (pipeline.keyframe_count() == keyframes_seen_) return;
   keyframes_seen_ = pipeline.keyframe_count();
-  publisher_.publish_path(pipeline.trajectory());
+  publish_path(pipeline);
 }
 
 void PipelinePublisher::finished(const PipelineBackEnd& pipeline) {
-  publisher_.publish_path(pipeline.trajectory());
+  publish_path(pipeline);
 }
 
 }  // namespace jpcr::cli

@@ -10,7 +10,10 @@
 //   curvature,       its refined pose, κ1/κ2 map (32FC2) and render_curvature (rgb8)
 //   curvature_color
 //   path             the whole refined trajectory (every frame) after each frame that added a
-//                    keyframe (and so refined), and after finish()
+//                    keyframe (and so refined), and after finish(). With keep_history = false
+//                    the pipeline forgets each frame once its pose is final: a path then holds
+//                    the frames made final since the previous path (each final pose is
+//                    published once) followed by the frames still held.
 #pragma once
 
 #include <chrono>
@@ -25,6 +28,10 @@ class PipelinePublisher {
  public:
   PipelinePublisher(const DdsParticipant& participant, const DdsConfig& config)
       : publisher_(participant, config) {}
+
+  /// Before the first frame: with keep_history = false, takes the frames `pipeline` makes final
+  /// (its FrameSink) for the next path.
+  void attach(PipelineBackEnd& pipeline);
 
   /// The CurvatureSink body; `pipeline` is the one calling it.
   void keyframe_final(const PipelineBackEnd& pipeline, int keyframe, const QuadricMap& quadrics);
@@ -43,7 +50,10 @@ class PipelinePublisher {
   std::size_t writes_failed() const { return publisher_.writes_failed(); }
 
  private:
+  void publish_path(const PipelineBackEnd& pipeline);
+
   DdsResultPublisher publisher_;
+  Trajectory final_since_path_;  // keep_history = false: final frames the pipeline forgot
   std::size_t keyframes_seen_ = 0;
   std::size_t keyframes_published_ = 0;
 };

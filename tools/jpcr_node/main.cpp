@@ -56,6 +56,7 @@ int run_all(const NodeOptions& o, const DdsParticipant& participant) {
         publisher.keyframe_final(*runner, keyframe, quadrics);
       },
       device_refiner_factory(o.device, std::cerr));
+  publisher.attach(*runner);
   node::StampOrder order;  // live frames in time order
   node::Progress progress;
   const node::Outcome outcome = node::receive(
@@ -225,6 +226,7 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
         publisher.keyframe_final(*back_end, keyframe, quadrics);
       },
       device_refiner_factory(o.device, std::cerr));
+  publisher.attach(*back_end);
   node::StopRules stop = o.stop;
   stop.max_items = 0;  // --max-frames belongs to the front end; its end of stream stops us
   // A front end that sent keyframes and is no longer matched without its end of stream (it
@@ -315,8 +317,9 @@ int node_main(int argc, char** argv) {
       "keyframe_pose + curvature (32FC2) + curvature_color (rgb8) when a keyframe's map is\n"
       "final, and path (all refined poses, transient local) after every keyframe and at the\n"
       "end. For unattended runs set pipeline.keep_history: false in --params: each frame is\n"
-      "forgotten once its pose is final and published, so memory stays bounded, and path\n"
-      "holds the frames still held. Malformed input samples are dropped with one log line each; "
+      "forgotten once its pose is final and published, so memory stays bounded, and each path\n"
+      "holds the frames made final since the previous one, then those still held.\n"
+      "Malformed input samples are dropped with one log line each; "
       "frames the node is too\n"
       "slow for (more than dds.image_history_depth waiting) are dropped, counted and logged.\n"
       "--role frontend / backend split the pipeline over two processes (two hosts) joined by\n"
