@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <csignal>
@@ -20,6 +21,7 @@
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include "jpcr/io/depth_undistortion.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
@@ -211,6 +213,10 @@ RawlogDataset::RawlogDataset(const std::string& path, const std::optional<Camera
   } catch (const std::invalid_argument& e) {
     throw InputError(path + ": invalid camera in the rawlog: " + e.what());
   }
+  if (camera_.has_distortion()) undistortion_ = std::make_unique<DepthUndistortion>(camera_, path);
+  const auto& scans = scans_->observations;
+  if (std::any_of(scans.begin(), scans.end(), [](const auto& s) { return !s->range_is_depth; }))
+    ray_lengths_ = DepthUndistortion::ray_lengths(camera_);
 }
 
 RawlogDataset::~RawlogDataset() = default;
@@ -261,23 +267,29 @@ Frame RawlogDataset::load(std::size_t index) const {
                      std::to_string(range.rows()) + " but the camera is " +
                      std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
   }
+  const double units = scan.rangeUnits;
+  if (!(units > 0.0) || !std::isfinite(units)) {
+    if (external) scan.unload();
+    throw InputError(where + "its rangeUnits (" + std::to_string(units) +
+                     ") is not a positive length in metres per unit");
+  }
   Frame frame;
   frame.timestamp = timestamp(index);
   frame.camera = camera_;
   frame.depth = DepthImage(camera_.width, camera_.height, 0.0f);
-  const double units = scan.rangeUnits;
   for (int v = 0; v < camera_.height; ++v) {
     for (int u = 0; u < camera_.width; ++u) {
       double value = range(v, u) * units;
-      if (!scan.range_is_depth && value > 0.0) {
-        // A range along the ray: depth = range / |ray| with ray = ((u−cx)/fx, (v−cy)/fy, 1).
-        const double kx = (u - camera_.cx) / camera_.fx, ky = (v - camera_.cy) / camera_.fy;
-        value /= std::sqrt(1.0 + kx * kx + ky * ky);
-      }
+      if (!scan.range_is_depth && value > 0.0)  // a range along the ray: depth = range / |ray|
+        value /= ray_lengths_[static_cast<std::size_t>(v) * camera_.width + u];
       frame.depth(u, v) = static_cast<float>(value);
     }
   }
   if (external) scan.unload();
+  if (undistortion_) {
+    undistortion_->apply(frame.depth);
+    frame.camera.distortion = {};  // the depth as delivered is rectified (same K)
+  }
   return frame;
 }
 

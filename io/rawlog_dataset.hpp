@@ -14,12 +14,16 @@
 
 namespace jpcr {
 
+class DepthUndistortion;
+
 class RawlogDataset final : public FrameSource {
  public:
   /// Loads the rawlog; throws InputError naming the file when it cannot be read, holds no 3-D
   /// range scan with a range image, holds scans of more than one sensor label, scans out of
   /// time order, or (without `camera`) scans whose intrinsics differ. `camera` overrides the
-  /// intrinsics stored in the file (its size must match the range images).
+  /// intrinsics stored in the file (its size must match the range images); when it has lens
+  /// distortion, the depth is rectified as a TUM directory's is (DepthUndistortion) and the
+  /// frames' cameras carry none.
   explicit RawlogDataset(const std::string& path,
                          const std::optional<CameraIntrinsics>& camera = std::nullopt);
   ~RawlogDataset() override;
@@ -41,6 +45,8 @@ class RawlogDataset final : public FrameSource {
   std::string images_directory_;  // where externally stored range images are
   CameraIntrinsics camera_;
   std::unique_ptr<Scans> scans_;
+  std::unique_ptr<DepthUndistortion> undistortion_;  // a --config camera with lens distortion
+  std::vector<float> ray_lengths_;  // per raw pixel, when scans store ranges along the ray
 };
 
 /// Writes frames as a rawlog of CObservation3DRangeScan (range = depth, units 1/depth_scale of

@@ -4,23 +4,15 @@
 #include <filesystem>
 #include <sstream>
 
-#include <opencv2/calib3d.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/depth_png.hpp"
+#include "jpcr/io/depth_undistortion.hpp"
 #include "jpcr/io/timestamp_association.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace fs = std::filesystem;
 
 namespace jpcr {
-
-// Lens undistortion of depth with nearest-neighbour lookup (depth must not be interpolated
-// across edges). Built once per dataset when the camera has distortion coefficients.
-struct TumDataset::Undistortion {
-  cv::Mat map_x, map_y;
-};
 
 namespace {
 
@@ -120,32 +112,9 @@ TumDataset::TumDataset(const std::string& directory, const CameraIntrinsics& cam
     }
   }
 
-  if (camera_.has_distortion()) {
-    undistortion_ = std::make_unique<Undistortion>();
-    const cv::Matx33d K(camera_.fx, 0, camera_.cx, 0, camera_.fy, camera_.cy, 0, 0, 1);
-    const cv::Mat dist(camera_.distortion.size(), 1, CV_64F,
-                       const_cast<double*>(camera_.distortion.data()));
-    cv::initUndistortRectifyMap(K, dist, cv::Mat(), K, cv::Size(camera_.width, camera_.height),
-                                CV_32FC1, undistortion_->map_x, undistortion_->map_y);
-    // Coefficients that send most pixels' rays outside the sensor are a typing or unit error
-    // (a lens keeps nearly all of its own image): refuse them rather than track empty frames.
-    std::size_t inside = 0;
-    for (int v = 0; v < camera_.height; ++v)
-      for (int u = 0; u < camera_.width; ++u) {
-        const float x = undistortion_->map_x.at<float>(v, u);
-        const float y = undistortion_->map_y.at<float>(v, u);
-        inside +=
-            (x >= 0.0f && x <= camera_.width - 1.0f && y >= 0.0f && y <= camera_.height - 1.0f) ? 1
-                                                                                                : 0;
-      }
-    const double fraction =
-        static_cast<double>(inside) / (static_cast<double>(camera_.width) * camera_.height);
-    if (fraction < 0.5)
-      throw InputError(directory_ + ": the camera's distortion coefficients take " +
-                       std::to_string(static_cast<int>(std::lround(100.0 * (1.0 - fraction)))) +
-                       " % of the pixels from outside the image (check them: OpenCV's order k1 "
-                       "k2 p1 p2 k3, for the depth camera)");
-  }
+  // Built once per dataset when the camera has distortion coefficients.
+  if (camera_.has_distortion())
+    undistortion_ = std::make_unique<DepthUndistortion>(camera_, directory_);
 }
 
 TumDataset::~TumDataset() = default;
@@ -161,11 +130,7 @@ Frame TumDataset::load(std::size_t index) const {
   frame.depth =
       load_depth_png(depth_path(index), camera_.depth_scale, camera_.width, camera_.height);
   if (undistortion_) {
-    cv::Mat raw(frame.depth.height(), frame.depth.width(), CV_32FC1, frame.depth.data());
-    cv::Mat undistorted;
-    cv::remap(raw, undistorted, undistortion_->map_x, undistortion_->map_y, cv::INTER_NEAREST,
-              cv::BORDER_CONSTANT, cv::Scalar(0));
-    undistorted.copyTo(raw);
+    undistortion_->apply(frame.depth);
     frame.camera.distortion = {};  // the depth as delivered is rectified (same K)
   }
   if (options_.load_color && color_[index]) {

@@ -17,6 +17,8 @@ struct TumDatasetOptions {
   bool load_color = false;            // also load the associated rgb/ image
 };
 
+class DepthUndistortion;
+
 class TumDataset final : public FrameSource {
  public:
   /// Reads and checks the lists; throws InputError naming the file and line on a problem
@@ -39,8 +41,6 @@ class TumDataset final : public FrameSource {
   std::string depth_path(std::size_t index) const;
 
  private:
-  struct Undistortion;
-
   std::string directory_;
   CameraIntrinsics camera_;
   TumDatasetOptions options_;
@@ -48,7 +48,7 @@ class TumDataset final : public FrameSource {
   std::vector<std::optional<std::string>> color_;  // per depth frame
   std::vector<std::optional<Eigen::Isometry3d>> ground_truth_;
   Trajectory recorded_ground_truth_;
-  std::unique_ptr<Undistortion> undistortion_;
+  std::unique_ptr<DepthUndistortion> undistortion_;  // with lens distortion
 };
 
 }  // namespace jpcr
