@@ -127,9 +127,10 @@ std::string format_trajectory(const Trajectory& trajectory, const std::string& c
     q.normalize();
     if (q.w() < 0.0) q.coeffs() = -q.coeffs();  // one canonical sign
     const Eigen::Vector3d t = p.pose.translation();
-    out << format_double(p.timestamp) << ' ' << format_double(t.x()) << ' ' << format_double(t.y())
-        << ' ' << format_double(t.z()) << ' ' << format_double(q.x()) << ' ' << format_double(q.y())
-        << ' ' << format_double(q.z()) << ' ' << format_double(q.w()) << '\n';
+    out << format_timestamp(p.timestamp) << ' ' << format_double(t.x()) << ' '
+        << format_double(t.y()) << ' ' << format_double(t.z()) << ' ' << format_double(q.x()) << ' '
+        << format_double(q.y()) << ' ' << format_double(q.z()) << ' ' << format_double(q.w())
+        << '\n';
   }
   return out.str();
 }

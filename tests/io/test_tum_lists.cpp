@@ -1,5 +1,8 @@
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
+#include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/timestamp_association.hpp"
 #include "jpcr/io/tum_lists.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -59,6 +62,24 @@ TEST(Trajectory, WriteReadRoundTripIsExact) {
     EXPECT_EQ(back[i].timestamp, t[i].timestamp);  // shortest round-trip text is exact
     EXPECT_LT((back[i].pose.matrix() - t[i].pose.matrix()).norm(), 1e-14);
   }
+}
+
+// Whole-second stamps (a rawlog's, a simulator's) are written as digits, not "1.7e+09", and
+// still read back exactly; so are tiny and fractional ones.
+TEST(Trajectory, StampsAreWrittenInFixedNotation) {
+  Trajectory t;
+  for (const double stamp : {1e-7, 0.5, 1305031102.1753041, 1700000000.0, 1700000000.25})
+    t.push_back({stamp, Eigen::Isometry3d::Identity()});
+  test::TempDir dir;
+  write_trajectory(dir.file("t.txt"), t);
+  const std::string text = read_file(dir.file("t.txt"));
+  EXPECT_EQ(std::count(text.begin(), text.end(), 'e'), 1) << text;  // the header's "timestamp"
+  EXPECT_NE(text.find("\n1700000000 "), std::string::npos) << text;
+  EXPECT_NE(text.find("\n0.0000001 "), std::string::npos) << text;
+  const Trajectory back = read_trajectory(dir.file("t.txt"));
+  ASSERT_EQ(back.size(), t.size());
+  for (std::size_t i = 0; i < t.size(); ++i)
+    EXPECT_EQ(back[i].timestamp, t[i].timestamp);
 }
 
 TEST(Trajectory, RejectsNaNWrongFieldCountBadQuaternionAndUnsortedStamps) {

@@ -135,9 +135,9 @@ void write_verdicts(std::ostream& out, const KeyframePipeline& p) {
   };
   for (std::size_t i = 0; i < p.frames().size(); ++i) {
     const FrameVerdicts v = p.verdicts(i);
-    out << format_double(p.frames()[i].front_end.timestamp) << ' ' << to_string(v.front_end) << ' '
-        << refinement(v.pair) << ' ' << refinement(v.window) << ' ' << (v.trusted() ? "yes" : "no")
-        << '\n';
+    out << format_timestamp(p.frames()[i].front_end.timestamp) << ' ' << to_string(v.front_end)
+        << ' ' << refinement(v.pair) << ' ' << refinement(v.window) << ' '
+        << (v.trusted() ? "yes" : "no") << '\n';
   }
 }
 
