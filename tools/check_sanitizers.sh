@@ -18,7 +18,7 @@ CC=clang CXX=clang++ cmake -S . -B "$build" -DCMAKE_BUILD_TYPE=Release \
 cmake --build "$build" -j"$(nproc)"
 export ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1
 export UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
-export LSAN_OPTIONS=suppressions=$PWD/tests/fuzz/lsan.supp
+export LSAN_OPTIONS="suppressions='$PWD/tests/fuzz/lsan.supp'"  # quoted: a path with spaces
 # The heaviest numeric cases of the programs both stages build (test_keyframe_tracker,
 # test_quadric_fit: 0.3–3 min each here) run in the main stage only; the code they drive is
 # covered here by their faster neighbours.

@@ -27,7 +27,12 @@ budget=${JPCR_GPU_CHECK_BUDGET:-570}
 limit=${JPCR_STEP_LIMIT:-240}
 jobs=$(nproc)
 all=0
-[ "${1:-}" = "--all" ] && all=1
+case "${1:-}" in
+  "") ;;
+  --all) all=1 ;;
+  -h|--help) sed -n '2,/^set /p' "$0" | sed '$d; s/^# \{0,1\}//'; exit 0 ;;
+  *) echo "gpu-check: unknown option '$1' (--all, --help)" >&2; exit 2 ;;
+esac
 logs=$build/gpu-check-logs
 rm -rf "$logs"
 mkdir -p "$logs"

@@ -7,6 +7,7 @@ time. Uses Debian's python3-matplotlib: run it with /usr/bin/python3.
       --out trajectories.png
 """
 import argparse
+import os
 import sys
 
 import numpy as np
@@ -77,7 +78,10 @@ def main():
     fig, (top, err) = plt.subplots(1, 2, figsize=(12, 5))
     top.plot(gt_xyz[:, 0], gt_xyz[:, 1], "k-", lw=2, label="ground truth")
     for spec in args.est:
-        path, _, label = spec.partition(":")
+        # FILE:LABEL, split at the last ':' unless the whole spec names a file (a path with ':').
+        path, sep, label = spec.rpartition(":")
+        if not sep or os.path.exists(spec):
+            path, label = spec, ""
         t, xyz = read_tum(path)
         pairs = associate(t, gt_t, args.max_difference)
         if len(pairs) < 3:
@@ -103,9 +107,13 @@ def main():
         fig.suptitle(args.title)
     fig.tight_layout()
     tmp = args.out + ".tmp.png"
-    fig.savefig(tmp, dpi=110)
-    import os
-    os.replace(tmp, args.out)
+    try:
+        fig.savefig(tmp, dpi=110)
+        os.replace(tmp, args.out)
+    except OSError as e:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        sys.exit(f"plot_trajectory: error: {args.out}: {e.strerror or e}")
     print(f"plot_trajectory: wrote {args.out}")
 
 

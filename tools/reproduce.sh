@@ -14,38 +14,50 @@
 # repository's tests/data (unless --tum), and exit status 1 unless every section is present and
 # the pose orderings hold (CI runs it: tests/tools). --no-build: use the programs already built in
 # --build. Every number in the report comes from this run; report/ is committed output of a full
-# run.
+# run. Relative paths are the caller's. An interrupted run resumes with the same --out; runs made
+# there by another revision or with other options are refused (give a fresh --out).
 set -euo pipefail
-cd "$(dirname "$0")/.."
+caller=$PWD
+repo=$(cd "$(dirname "$0")/.." && pwd)
 args="$*"
 
 quick=0 no_build=0 out="" tum="" camera=configs/tum_fr1.yaml
 build=${JPCR_BUILD_DIR:-build}
 size=640x480 frames=4 window=4 rail_frames=200 rail_size=320x240 real_frames=300 real_jftf=10
 kinect_frames=8 study_size=320x240 study_draws=8
-usage() { sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; }
+# --quick sets small defaults first, so that options given with it still apply.
+for a in "$@"; do
+  if [[ $a == --quick ]]; then
+    quick=1
+    size=160x120 frames=3 window=3 rail_frames=24 rail_size=160x120 real_frames=8 real_jftf=3
+    kinect_frames=3 study_size=80x60 study_draws=2
+  fi
+done
+usage() { awk 'NR > 1 && !/^#/ { exit } NR > 1' "$0" | sed 's/^# \{0,1\}//'; }
+# Paths given on the command line are the caller's: relative ones are taken from its directory.
+from_caller() { [[ $1 == /* ]] && echo "$1" || echo "$caller/$1"; }
+need() { [[ $# -ge 2 && -n $2 ]] || { echo "reproduce.sh: $1 needs a value" >&2; exit 2; }; }
 while [[ $# -gt 0 ]]; do
   case $1 in
-    --quick) quick=1; shift ;;
-    --out) out=$2; shift 2 ;;
-    --tum) tum=$2; shift 2 ;;
-    --camera) camera=$2; shift 2 ;;
-    --build) build=$2; shift 2 ;;
+    --quick) shift ;;
+    --out) need "$@"; out=$(from_caller "$2"); shift 2 ;;
+    --tum) need "$@"; tum=$(from_caller "$2"); shift 2 ;;
+    --camera) need "$@"; camera=$(from_caller "$2"); shift 2 ;;
+    --build) need "$@"; build=$(from_caller "$2"); shift 2 ;;
     --no-build) no_build=1; shift ;;
-    --size) size=$2; shift 2 ;;
-    --frames) frames=$2; shift 2 ;;
-    --window) window=$2; shift 2 ;;
-    --rail-frames) rail_frames=$2; shift 2 ;;
-    --rail-size) rail_size=$2; shift 2 ;;
-    --real-frames) real_frames=$2; shift 2 ;;
-    --real-jftf-frames) real_jftf=$2; shift 2 ;;
+    --size) need "$@"; size=$2; shift 2 ;;
+    --frames) need "$@"; frames=$2; shift 2 ;;
+    --window) need "$@"; window=$2; shift 2 ;;
+    --rail-frames) need "$@"; rail_frames=$2; shift 2 ;;
+    --rail-size) need "$@"; rail_size=$2; shift 2 ;;
+    --real-frames) need "$@"; real_frames=$2; shift 2 ;;
+    --real-jftf-frames) need "$@"; real_jftf=$2; shift 2 ;;
     -h|--help) usage; exit 0 ;;
     *) echo "reproduce.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
+cd "$repo"
 if [[ $quick == 1 ]]; then
-  size=160x120 frames=3 window=3 rail_frames=24 rail_size=160x120 real_frames=8 real_jftf=3
-  kinect_frames=3 study_size=80x60 study_draws=2
   out=${out:-out/reproduce_quick}
   tum=${tum:-tests/data/tum_fr1_xyz_20}
 fi
@@ -53,9 +65,25 @@ tum=${tum:-../shared/data/tum_fr1_xyz_first300}
 out=${out:-report}
 runs=$out/runs
 mkdir -p "$runs"
+# Runs already in --out are reused (an interrupted run resumes) only when this revision made
+# them with these options; otherwise their numbers would be reported under the new ones.
+revision=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
+options="revision=$revision size=$size frames=$frames window=$window rail_frames=$rail_frames"
+options+=" rail_size=$rail_size real_frames=$real_frames real_jftf=$real_jftf"
+options+=" kinect_frames=$kinect_frames study_size=$study_size study_draws=$study_draws"
+options+=" tum=$tum camera=$camera"
+if [[ -s $runs/options ]] && [[ $(cat "$runs/options") != "$options" ]]; then
+  echo "reproduce.sh: $runs holds runs made with other options or at another revision:" >&2
+  echo "  then: $(cat "$runs/options")" >&2
+  echo "  now:  $options" >&2
+  echo "  give another --out, or delete $runs to start afresh" >&2
+  exit 2
+fi
+echo "$options" > "$runs/options"
 log=$out/reproduce.log
 : > "$log"
 say() { echo "reproduce: $*" | tee -a "$log" >&2; }
+failed() { say "FAILED: $1 (see $2)"; failures=$((failures + 1)); }  # what, its log
 
 bin=$build/tools
 if [[ $no_build == 0 ]]; then
@@ -102,8 +130,7 @@ run_method() {  # dataset method params out [extra...]
   local t0; t0=$(date +%s.%N)
   "$bin/jpcr_run" --dataset "$data" --method "$method" --window "$window" --params "$params" \
     --out "$dir" "$@" > "$dir.log" 2>&1 || {
-    say "FAILED: jpcr_run $method on $data (see $dir.log)"
-    failures=$((failures + 1))
+    failed "jpcr_run $method on $data" "$dir.log"
     return 0
   }
   /usr/bin/python3 -c "import sys; print(float(sys.argv[2]) - float(sys.argv[1]))" "$t0" "$(date +%s.%N)" \
@@ -120,7 +147,7 @@ for scene in room_spheres cylinders_boxes torus_saddle; do
     noise=range:$k; [[ $k == 0 ]] && noise=none
     [[ -f $seq/groundtruth.txt ]] || "$bin/jpcr_synth" --scene "$scene" --trajectory walk \
       --frames "$frames" --noise "$noise" --size "$size" --seed 1 --out "$seq" --force \
-      > "$cell/synth.log" 2>&1
+      > "$cell/synth.log" 2>&1 || { failed "jpcr_synth $scene" "$cell/synth.log"; continue; }
     params=$(noise_params "$k" pose)
     for m in $methods; do
       say "$scene noise $k %: $m ($(( $(date +%s) - start )) s)"
@@ -142,7 +169,8 @@ for scene in room_spheres cylinders_boxes torus_saddle; do
     for m in $curvature_methods; do
       [[ -d $cell/quad_$m/curvature ]] && continue
       "$bin/jpcr_curvature" --dataset "$seq" --method "$m" --params "$params" \
-        --frames "0:$((frames - 1))" --out "$cell/quad_$m" > "$cell/quad_$m.log" 2>&1
+        --frames "0:$((frames - 1))" --out "$cell/quad_$m" > "$cell/quad_$m.log" 2>&1 ||
+        failed "jpcr_curvature $m on $seq" "$cell/quad_$m.log"
     done
   done
 done
@@ -155,7 +183,7 @@ for scene in room_spheres cylinders_boxes torus_saddle; do
   mkdir -p "$cell"
   [[ -f $seq/groundtruth.txt ]] || "$bin/jpcr_synth" --scene "$scene" --trajectory walk \
     --frames "$kinect_frames" --noise kinect --size "$size" --seed 1 --out "$seq" --force \
-    > "$cell/synth.log" 2>&1
+    > "$cell/synth.log" 2>&1 || { failed "jpcr_synth $scene kinect" "$cell/synth.log"; continue; }
   : > "$cell/params.yaml"
   for m in icp-ftf j-ftf; do
     say "$scene kinect noise: $m ($(( $(date +%s) - start )) s)"
@@ -176,8 +204,7 @@ study_run() {  # out-name jpcr_eval-noise-options...
       > "$name.json.tmp" 2> "$name.log" && mv "$name.json.tmp" "$name.json"; then
     git rev-parse --short HEAD > "$name.revision" 2>/dev/null || true
   else
-    say "FAILED: jpcr_eval noise $* (see $name.log)"
-    failures=$((failures + 1))
+    failed "jpcr_eval noise $*" "$name.log"
   fi
 }
 study=$runs/noise_study
@@ -209,14 +236,17 @@ done
 # 2. Drift along a straight rail (10 mm per frame, Kinect-like noise).
 rail=$runs/rail
 mkdir -p "$rail"
-[[ -f $rail/sequence/groundtruth.txt ]] || "$bin/jpcr_synth" --scene rail_wall --trajectory rail \
-  --frames "$rail_frames" --noise kinect --size "$rail_size" --seed 1 --out "$rail/sequence" \
-  --force > "$rail/synth.log" 2>&1
-: > "$rail/params.yaml"
-for m in icp-ftf pipeline; do
-  say "rail: $m ($(( $(date +%s) - start )) s)"
-  run_method "$rail/sequence" "$m" "$rail/params.yaml" "$rail/$m"
-done
+if [[ -f $rail/sequence/groundtruth.txt ]] || "$bin/jpcr_synth" --scene rail_wall \
+    --trajectory rail --frames "$rail_frames" --noise kinect --size "$rail_size" --seed 1 \
+    --out "$rail/sequence" --force > "$rail/synth.log" 2>&1; then
+  : > "$rail/params.yaml"
+  for m in icp-ftf pipeline; do
+    say "rail: $m ($(( $(date +%s) - start )) s)"
+    run_method "$rail/sequence" "$m" "$rail/params.yaml" "$rail/$m"
+  done
+else
+  failed "jpcr_synth rail" "$rail/synth.log"
+fi
 
 # 3. Real data: the TUM frames, jpcr and the OpenCV peer on the same frames.
 real=$runs/real
@@ -232,9 +262,14 @@ if [[ -f $tum/depth.txt ]]; then
   say "real: j-ftf on the first $real_jftf frames"
   run_method "$tum" j-ftf "$real/params.yaml" "$real/j-ftf" --frames "0:$real_jftf" \
     --config "$camera"
-  [[ -s $real/peers.md ]] || "$build/tools/bench/bench_icp_peers" --dataset "$tum" \
-    --config "$camera" --frames "$real_frames" --save "$real/peers" > "$real/peers.md" 2> "$real/peers.log" \
-    || say "peer run failed (see $real/peers.log)"
+  if [[ ! -s $real/peers.md ]]; then
+    if "$build/tools/bench/bench_icp_peers" --dataset "$tum" --config "$camera" \
+        --frames "$real_frames" --save "$real/peers" > "$real/peers.md.tmp" 2> "$real/peers.log"; then
+      mv "$real/peers.md.tmp" "$real/peers.md"
+    else
+      failed "bench_icp_peers on $tum" "$real/peers.log"
+    fi
+  fi
 else
   say "no TUM data at $tum: the real-data section is left out"
 fi
@@ -244,7 +279,7 @@ say "report ($(( $(date +%s) - start )) s)"
 report_status=0
 /usr/bin/python3 tools/reproduce_report.py --runs "$runs" --out "$out" --quick "$quick" \
   --size "$size" --frames "$frames" --window "$window" --tum "$tum" \
-  --revision "$(git rev-parse --short HEAD 2>/dev/null || echo unknown)" \
+  --revision "$revision" \
   --command "tools/reproduce.sh $args" --seconds "$(( $(date +%s) - start ))" --bin "$bin" || report_status=$?
 say "done in $(( $(date +%s) - start )) s: $out/index.md"
 if [[ $failures -gt 0 ]]; then

@@ -329,6 +329,10 @@ def main():
     ap.add_argument("--recomputed-at", default="",
                     help="revision of this script when it re-reads the outputs of an earlier run")
     a = ap.parse_args()
+    if not os.path.isdir(a.runs) or not any(
+            os.path.isdir(os.path.join(a.runs, s)) for s in SCENES):
+        sys.exit(f"reproduce_report: error: {a.runs} holds no runs of tools/reproduce.sh "
+                 f"(no directory of {', '.join(SCENES)})")
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -946,7 +950,6 @@ def main():
     for m in ["icp-ftf", "j-ftf", "pipeline"]:
         if not (load_json(os.path.join(real, m, "report.json")) or {}).get("errors"):
             problems.append(f"real data: no {m} run with errors")
-    problems += [f"noise study: no {n} run" for n in STUDY_RUNS + CELL_RUNS if n not in study]
     problems += [f"noise study: no {n} run" for n in STUDY_RUNS + CELL_RUNS if n not in study]
     peers = os.path.join(real, "peers.md")
     if not (os.path.exists(peers) and os.path.getsize(peers)):

@@ -9,7 +9,7 @@ packages=(
   libceres-dev libopencv-dev libmrpt-obs-dev mrpt-common libcgal-dev
   cyclonedds-dev cyclonedds-tools
   python3-numpy python3-matplotlib
-  clang libclang-rt-14-dev
+  clang libclang-rt-14-dev libomp-dev
 )
 
 missing=()
@@ -31,5 +31,7 @@ if [ "$(id -u)" -ne 0 ]; then
 fi
 echo "setup: installing ${#missing[@]} missing package(s): ${missing[*]}"
 "${sudo_cmd[@]}" apt-get update -qq
-DEBIAN_FRONTEND=noninteractive "${sudo_cmd[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+# env after sudo: sudo's env_reset would drop a DEBIAN_FRONTEND set before it (debconf prompts).
+"${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends \
+  "${missing[@]}"
 echo "setup: done"
