@@ -427,6 +427,30 @@ JPCR_HD Scalar joint_pixel_cost(const QuadricT<Scalar>& q, const JointWindowView
   return cost;
 }
 
+/// Q-full's cost of one fixed quadric at the candidate poses `next`, over the frames that saw it
+/// in the linearisation at the poses `window` (`seen`: bit j − 1 for frame j), each frame's
+/// pattern taken at the pixel the quadric was associated to there: the cost the linearisation
+/// models, so that the step test compares the same terms. (Re-associated at the candidate, a
+/// step is credited with the cost of every pair it loses and charged for every pair it gains:
+/// single-pose Q-full then accepted steps whose cost on the same pairs rose, and never
+/// converged.) The next linearisation re-associates.
+template <typename Scalar, typename Sampler>
+JPCR_HD Scalar fixed_pixel_cost(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& window,
+                                const JointWindowView<Scalar>& next, unsigned seen,
+                                const JointTermParams& p, Sampler& sampler) {
+  const SampleGate<Scalar> limits = SampleGate<Scalar>::at(p.fit, q.center);
+  Scalar cost = 0;
+  for (int j = 1; j < window.frames; ++j) {
+    if (((seen >> (j - 1)) & 1u) == 0u) continue;
+    int su = 0, sv = 0, count = 0;
+    if (!associate(q.center, window.motions[j], window.views[j], window.camera, p, su, sv))
+      continue;  // not reached: the frame saw it at these poses
+    cost += sampler.cost(q, next.views[j], next.motions[j], next.pattern, next.pattern_size, su, sv,
+                         limits, count);
+  }
+  return cost;
+}
+
 /// joint_pixel_cost with the sample-by-sample sums.
 template <typename Scalar>
 JPCR_HD Scalar joint_pixel_cost(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& w, int u,

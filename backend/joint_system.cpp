@@ -30,7 +30,7 @@ struct ReductionShare {
   std::vector<double> S, s, A_diagonal;
   std::vector<int> seen;
   std::vector<PairFactors> factors;
-  std::vector<std::size_t> fixed_active;
+  std::vector<FixedPixel> fixed_active;
   double cost = 0.0;
   long terms = 0;
   int active = 0;
@@ -69,10 +69,13 @@ void linearize_row(const JointState& state, const JointWindowView<double>& windo
     share.cost += sys.cost;
     share.terms += sys.count;
     ++share.active;
-    for (int j = 0; j + 1 < M; ++j)
+    unsigned seen = 0;
+    for (int j = 0; j + 1 < M; ++j) {
       share.seen[j] += sys.seen[j] ? 1 : 0;
+      seen |= sys.seen[j] ? 1u << j : 0u;
+    }
     if (keep_factors) share.factors.push_back(PairFactors{i, sys.k, sys.K[0]});
-    if (!p.estimate_quadrics) share.fixed_active.push_back(i);
+    if (!p.estimate_quadrics) share.fixed_active.push_back(FixedPixel{i, seen});
   }
 }
 
@@ -233,19 +236,21 @@ void JointSystem::step_pair(const ReducedSystem& system, JointStep& out) const {
 
 void JointSystem::step_fixed(const JointState& state, const ReducedSystem& system,
                              JointStep& out) const {
+  const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
   const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
-  const JointWindowView<double> next{views_.data(),   moved.data(),
-                                     frames(),        camera_,
-                                     pattern_.data(), static_cast<int>(pattern_.size())};
+  const int pattern_size = static_cast<int>(pattern_.size());
+  const JointWindowView<double> window{views_.data(), motions.data(),  frames(),
+                                       camera_,       pattern_.data(), pattern_size};
+  const JointWindowView<double> next{views_.data(), moved.data(),    frames(),
+                                     camera_,       pattern_.data(), pattern_size};
   const long count = static_cast<long>(system.fixed_active.size());
   double cost = 0.0;
 #pragma omp parallel reduction(+ : cost)
-  with_sampler(sampling_, next.pattern_size, [&](auto& sampler) {
+  with_sampler(sampling_, pattern_size, [&](auto& sampler) {
 #pragma omp for schedule(dynamic, 256)
     for (long k = 0; k < count; ++k) {
-      const std::size_t i = system.fixed_active[static_cast<std::size_t>(k)];
-      cost += joint_pixel_cost(state.quadrics[i], next, static_cast<int>(i % width_),
-                               static_cast<int>(i / width_), params_, sampler);
+      const FixedPixel& f = system.fixed_active[static_cast<std::size_t>(k)];
+      cost += fixed_pixel_cost(state.quadrics[f.pixel], window, next, f.seen, params_, sampler);
     }
   });
   out.cost = cost;

@@ -27,6 +27,14 @@ struct JointState {
 /// What the back-substitution of J-ftf needs of one active quadric, kept from its linearisation:
 /// Δγ_p = k − K Δξ (42 numbers). Only for M = 2; larger windows would keep (M − 1)·36 + 6 numbers
 /// per quadric (over 1 kB at M = 5) and recompute the system instead.
+/// Q-full: an active quadric and the frames that see it (bit j − 1 for frame j).
+struct FixedPixel {
+  std::size_t pixel = 0;  // row-major index in the reference frame
+  unsigned seen = 0;
+  bool operator<(const FixedPixel& o) const { return pixel < o.pixel; }
+  bool operator==(const FixedPixel& o) const { return pixel == o.pixel && seen == o.seen; }
+};
+
 struct PairFactors {
   std::size_t pixel = 0;    // row-major index in the reference frame
   QuadricVector<double> k;  // C_p⁻¹ b_p
@@ -39,12 +47,12 @@ struct ReducedSystem {
   Eigen::MatrixXd S;
   Eigen::VectorXd s;
   Eigen::VectorXd A_diagonal;
-  double cost = 0.0;                      // Σ w r² over the active quadrics
-  long terms = 0;                         // their terms inside the gate
-  int active = 0;                         // quadrics taking part
-  std::vector<int> seen;                  // per pose T_2 … T_M: active quadrics that frame sees
-  std::vector<PairFactors> factors;       // M = 2: every active quadric's back-substitution factors
-  std::vector<std::size_t> fixed_active;  // Q-full: the active quadrics' pixels
+  double cost = 0.0;                     // Σ w r² over the active quadrics
+  long terms = 0;                        // their terms inside the gate
+  int active = 0;                        // quadrics taking part
+  std::vector<int> seen;                 // per pose T_2 … T_M: active quadrics that frame sees
+  std::vector<PairFactors> factors;      // M = 2: every active quadric's back-substitution factors
+  std::vector<FixedPixel> fixed_active;  // Q-full: the active quadrics and their frames
 };
 
 /// A proposed step and where it leads.
@@ -53,6 +61,7 @@ struct JointStep {
   std::vector<QuadricVector<double>> quadric_steps;  // Δγ_p per pixel, 0 where inactive
   JointState candidate;                              // exp(Δξ^) T, γ ⊕ Δγ
   double cost = 0.0;  // Σ w r² at the candidate over the quadrics active in the linearisation
+                      // (Q-full: over its (quadric, frame) pairs, fixed_pixel_cost)
 };
 
 /// How the CPU evaluates each quadric's per-frame sums: gathered into contiguous arrays and

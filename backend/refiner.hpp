@@ -74,12 +74,12 @@ struct RefinementReport {
   double degeneracy = 0.0;
   /// Per pose T_2 … T_M: the predicted RMS length of its translation error (m) and rotation
   /// error (rad) against the reference frame, from RefinementResult::covariance (pose_spread);
-  /// empty where the refiner gives no covariance (icp-bundle), 0 where S is degenerate.
+  /// empty where the refiner gives no covariance (icp-bundle), 0 where S is singular.
   std::vector<double> translation_sd, rotation_sd;
   /// The same for the steps T_1⁻¹T_2, T_2⁻¹T_3, …, T_{M−1}⁻¹T_M between successive frames, from
   /// RefinementResult::joint_covariance (its cross terms): what a relative pose error metric
   /// sees. For J-ftf the one step is the pose. Empty without a joint covariance (icp-bundle, a
-  /// degenerate S).
+  /// singular S).
   std::vector<double> step_translation_sd, step_rotation_sd;
 
   bool converged() const { return verdict == RefinementVerdict::kConverged; }
@@ -90,7 +90,9 @@ struct RefinementResult {
   QuadricMap quadrics;                   // the reference frame's quadrics, curvature recomputed
   /// Per pose, (v, ω) order, of the left update T ← exp(ξ^) T: the blocks of reuse · σ² S⁻¹
   /// (RefinementReport::sample_reuse, residual_variance); [0] = 0 (the gauge). Zero blocks when
-  /// S is degenerate. It describes the spread of the estimate under sensor noise, not its bias.
+  /// S is singular (degeneracy 0); below the degeneracy threshold (verdict `degenerate`) S⁻¹ is
+  /// kept, large along the weak direction, and the verdict says not to use the poses. It
+  /// describes the spread of the estimate under sensor noise, not its bias.
   std::vector<Matrix6d> covariance;
   /// All poses T_2 … T_M jointly, 6(M−1) square (its diagonal blocks are `covariance`); empty
   /// when unknown.

@@ -416,6 +416,26 @@ JointState quadric_state(const QuadricMap& map, const std::vector<Eigen::Isometr
   return s;
 }
 
+// Q-full's step test compares the same terms as the linearisation: each (quadric, frame) pair it
+// counted, at the pixel it was associated to there. At a zero step the candidate's cost is then
+// the linearisation's (to the rounding of the candidate pose's re-orthonormalisation).
+TEST(FixedQuadricStep, IsJudgedOnTheLinearisationsPairs) {
+  const JointTestWindow w = render_window(3, 160, "range:1");
+  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  const JointTermParams p = JointParams{}.terms(false);
+  const JointSystem system(w.vertices, w.camera, pattern, p, JointSampling::kReference);
+  std::vector<Eigen::Isometry3d> poses = w.truth;
+  poses[2] = perturbed(poses[2], 0.01, 1.0, 2);
+  const JointState state = quadric_state(map, poses, 1);
+  const ReducedSystem lin = system.linearize(state, 0.0);
+  ASSERT_GT(lin.active, 1000);
+  for (const FixedPixel& f : lin.fixed_active)
+    ASSERT_NE(f.seen, 0u) << "an active quadric no frame sees";
+  const JointStep still = system.step(state, lin, 0.0, {Vector6d::Zero(), Vector6d::Zero()});
+  EXPECT_NEAR(still.cost, lin.cost, 1e-8 * lin.cost);
+}
+
 TEST(JointSystemBuffers, ReusedBuffersGiveWhatFreshOnesGive) {
   const JointTestWindow w = render_window(3, 160, "range:1");
   const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
@@ -463,7 +483,7 @@ TEST(JointSystemBuffers, ReusedBuffersGiveWhatFreshOnesGive) {
       ASSERT_EQ(a[k].k, b[k].k);  // one pixel's factors: the same arithmetic, bit for bit
       ASSERT_EQ(a[k].K, b[k].K);
     }
-    std::vector<std::size_t> fa = reused.fixed_active, fb = fresh.fixed_active;
+    std::vector<FixedPixel> fa = reused.fixed_active, fb = fresh.fixed_active;
     std::sort(fa.begin(), fa.end());
     std::sort(fb.begin(), fb.end());
     EXPECT_EQ(fa, fb);
