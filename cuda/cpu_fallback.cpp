@@ -4,6 +4,7 @@ namespace jpcr {
 
 void CpuFallback::record(const CudaError& e) const {
   const std::lock_guard<std::mutex> lock(mutex_);
+  if (e.out_of_memory()) ++out_of_memory_calls_;
   if (on_cpu_) return;  // another thread's failure switched it already
   if (!e.out_of_memory()) {
     on_cpu_ = true;
@@ -11,7 +12,6 @@ void CpuFallback::record(const CudaError& e) const {
          << "); it runs on the cpu from here on\n";
     return;
   }
-  ++out_of_memory_calls_;
   if (++out_of_memory_in_a_row_ >= kMaxOutOfMemoryInARow) {
     on_cpu_ = true;
     log_ << "jpcr: " << method_ << " on the GPU ran out of device memory " << kMaxOutOfMemoryInARow

@@ -22,6 +22,7 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include "jpcr/io/depth_undistortion.hpp"
+#include "jpcr/io/number_format.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
@@ -270,7 +271,7 @@ Frame RawlogDataset::load(std::size_t index) const {
   const double units = scan.rangeUnits;
   if (!(units > 0.0) || !std::isfinite(units)) {
     if (external) scan.unload();
-    throw InputError(where + "its rangeUnits (" + std::to_string(units) +
+    throw InputError(where + "its rangeUnits (" + format_double(units) +
                      ") is not a positive length in metres per unit");
   }
   Frame frame;

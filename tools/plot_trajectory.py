@@ -78,10 +78,16 @@ def main():
     fig, (top, err) = plt.subplots(1, 2, figsize=(12, 5))
     top.plot(gt_xyz[:, 0], gt_xyz[:, 1], "k-", lw=2, label="ground truth")
     for spec in args.est:
-        # FILE:LABEL, split at the last ':' unless the whole spec names a file (a path with ':').
-        path, sep, label = spec.rpartition(":")
-        if not sep or os.path.exists(spec):
+        # FILE or FILE:LABEL: the shortest prefix that names a file is FILE (a path or a label
+        # may hold ':'); without one, the part before the first ':'.
+        cuts = [i for i, c in enumerate(spec) if c == ":"]
+        at = next((i for i in cuts if os.path.isfile(spec[:i])), None)
+        if os.path.isfile(spec):
             path, label = spec, ""
+        elif at is not None:
+            path, label = spec[:at], spec[at + 1:]
+        else:
+            path, _, label = spec.partition(":")
         t, xyz = read_tum(path)
         pairs = associate(t, gt_t, args.max_difference)
         if len(pairs) < 3:

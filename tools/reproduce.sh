@@ -22,7 +22,7 @@ repo=$(cd "$(dirname "$0")/.." && pwd)
 args="$*"
 
 quick=0 no_build=0 out="" tum="" camera=configs/tum_fr1.yaml
-build=${JPCR_BUILD_DIR:-build}
+build=${JPCR_BUILD_DIR:-$repo/build}
 size=640x480 frames=4 window=4 rail_frames=200 rail_size=320x240 real_frames=300 real_jftf=10
 kinect_frames=8 study_size=320x240 study_draws=8
 # --quick sets small defaults first, so that options given with it still apply.
@@ -56,18 +56,24 @@ while [[ $# -gt 0 ]]; do
     *) echo "reproduce.sh: unknown option '$1' (see --help)" >&2; exit 2 ;;
   esac
 done
+build=$(from_caller "$build")  # JPCR_BUILD_DIR too is the caller's
 cd "$repo"
 if [[ $quick == 1 ]]; then
-  out=${out:-out/reproduce_quick}
-  tum=${tum:-tests/data/tum_fr1_xyz_20}
+  out=${out:-$repo/out/reproduce_quick}
+  tum=${tum:-$repo/tests/data/tum_fr1_xyz_20}
 fi
-tum=${tum:-../shared/data/tum_fr1_xyz_first300}
-out=${out:-report}
+tum=${tum:-$repo/../shared/data/tum_fr1_xyz_first300}
+out=${out:-$repo/report}
+[[ $camera == /* ]] || camera=$repo/$camera
 runs=$out/runs
 mkdir -p "$runs"
 # Runs already in --out are reused (an interrupted run resumes) only when this revision made
 # them with these options; otherwise their numbers would be reported under the new ones.
 revision=$(git rev-parse --short HEAD 2>/dev/null || echo unknown)
+# Uncommitted changes to tracked files are part of the revision: a hash of them.
+if ! git diff --quiet HEAD 2>/dev/null; then
+  revision+="+$(git diff HEAD | sha1sum | cut -c1-8)"
+fi
 options="revision=$revision size=$size frames=$frames window=$window rail_frames=$rail_frames"
 options+=" rail_size=$rail_size real_frames=$real_frames real_jftf=$real_jftf"
 options+=" kinect_frames=$kinect_frames study_size=$study_size study_draws=$study_draws"

@@ -7,6 +7,7 @@
 #include <iostream>
 #include <mutex>
 #include <utility>
+#include <vector>
 
 #include "jpcr/io/dds/ros_messages.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -270,11 +271,22 @@ void DdsDepthSubscriber::process() {
       }
     }
   }
-  for (const ReceivedImage& r : images) {
+  // The newest queue_depth good images are the ones the bound below keeps: older ones (and the
+  // decoded frames waiting before them) are dropped now, without being decoded.
+  std::size_t stale = 0, newer_good = 0;
+  std::vector<char> keep(images.size(), 1);
+  for (std::size_t k = images.size(); k-- > 0;)
+    if (images[k].problem.empty() && ++newer_good > s.queue_depth) {
+      keep[k] = 0;
+      ++stale;
+    }
+  for (std::size_t k = 0; k < images.size(); ++k) {
+    const ReceivedImage& r = images[k];
     if (!r.problem.empty()) {
       reject(config_.depth_topic, r.problem);
       continue;
     }
+    if (!keep[k]) continue;
     if (!of_this_camera(r.frame_id)) {
       reject(config_.depth_topic, other_camera(r.frame_id));
       continue;
@@ -299,7 +311,6 @@ void DdsDepthSubscriber::process() {
   }
   // Decoded frames wait for the caller under the same KEEP_LAST bound as the received images: a
   // caller slower than the camera gets the newest, the oldest go, counted.
-  std::size_t stale = 0;
   for (; s.frames.size() > s.queue_depth; ++stale) {
     s.frames.pop_front();
     s.frame_ids.pop_front();

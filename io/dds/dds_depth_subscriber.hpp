@@ -58,7 +58,9 @@ class DdsDepthSubscriber {
   /// Depth images dropped from the full queue before the caller asked for them, plus those
   /// Cyclone reports lost in transport (sample lost status).
   std::size_t frames_dropped() const;
-  /// Frames received and not yet returned by wait_frame (at a stop: left unprocessed).
+  /// Frames received and not yet returned by wait_frame (at a stop: left unprocessed). On the
+  /// caller's thread, as wait_frame: at most twice image_history_depth (decoded ones waiting,
+  /// and those the listener queued since).
   std::size_t frames_waiting() const;
   /// Publishers matched on the depth topic.
   int matched() const;

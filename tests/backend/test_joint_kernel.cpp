@@ -418,7 +418,10 @@ JointState quadric_state(const QuadricMap& map, const std::vector<Eigen::Isometr
 
 // Q-full's step test compares the same terms as the linearisation: each (quadric, frame) pair it
 // counted, at the pixel it was associated to there. At a zero step the candidate's cost is then
-// the linearisation's (to the rounding of the candidate pose's re-orthonormalisation).
+// the linearisation's (to the rounding of the candidate pose's re-orthonormalisation): this
+// checks the pairs' bookkeeping (a seen bit on the wrong frame drops or adds terms). That the
+// pairs stay fixed over a step is what FixedQuadricAlignment.AWindowEndsWhereEachPoseEndsAlone
+// (test_joint_refinement.cpp) checks.
 TEST(FixedQuadricStep, IsJudgedOnTheLinearisationsPairs) {
   const JointTestWindow w = render_window(3, 160, "range:1");
   const QuadricMap map = QuadricFit().estimate(w.vertices[0]);

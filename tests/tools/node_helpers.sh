@@ -50,18 +50,32 @@ expect_node() {
   fi
 }
 
-# The final TUM block a `jpcr_dds_echo --tum` of a path printed == a trajectory file, to 1e-9.
+# The final TUM block a `jpcr_dds_echo --tum` of a path printed == a trajectory file, to 1e-9;
+# with a third argument `union`, the last pose of each stamp over every block printed (the paths
+# of keep_history: false, each holding the frames made final since the one before).
 same_path() {
-  /usr/bin/python3 - "$1" "$2" <<'PY'
+  /usr/bin/python3 - "$1" "$2" "${3:-}" <<'PY'
 import sys
 def poses(lines):
-    return [[float(x) for x in l.split()] for l in lines if l.strip() and not l.startswith("#")]
+    return [[float(x) for x in l.split()] for l in lines if l.strip() and not l.startswith(("#", "path "))]
 echo = open(sys.argv[1]).read().splitlines()
 starts = [i for i, l in enumerate(echo) if l.startswith("path ")]
 if not starts:
     sys.exit("no path received")
-got = poses(echo[starts[-1] + 1:])
 want = poses(open(sys.argv[2]).read().splitlines())
+if sys.argv[3] == "union":  # every path's poses, the last one of each stamp
+    bounds = starts + [len(echo)]
+    for a, b in zip(bounds, bounds[1:]):
+        stamps = [round(p[0], 6) for p in poses(echo[a + 1:b])]
+        if len(set(stamps)) != len(stamps):
+            sys.exit("a path holds a frame twice: %s" % stamps)
+    last = {round(p[0], 6): p for p in poses(echo)}
+    missing = [w[0] for w in want if round(w[0], 6) not in last]
+    if missing:
+        sys.exit("no path held the frames stamped %s" % missing)
+    got = [last[round(w[0], 6)] for w in want]
+else:
+    got = poses(echo[starts[-1] + 1:])
 if len(got) != len(want):
     sys.exit("final path has %d poses, the file %d" % (len(got), len(want)))
 worst = 0.0

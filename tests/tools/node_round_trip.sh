@@ -120,29 +120,8 @@ expect 0 "published 6 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 \
 expect_node $forget_pid 200 "$tmp/forget.txt" "processed 6 frames, 6 keyframes, 6 curvature maps" \
   "keep_history false"
 kill -INT $forget_echo; wait_bounded $forget_echo 10
-/usr/bin/python3 - "$tmp/forget_path.txt" "$tmp/off_full/trajectory.txt" <<'PY' || fail=1
-import sys
-def pose(line):
-    return [float(x) for x in line.split()]
-final = {}  # stamp -> the last pose any path gave it
-for l in open(sys.argv[1]).read().splitlines():
-    if l.strip() and not l.startswith(("#", "path ")):
-        p = pose(l)
-        final[round(p[0], 6)] = p
-want = [pose(l) for l in open(sys.argv[2]) if l.strip() and not l.startswith("#")]
-missing = [w[0] for w in want if round(w[0], 6) not in final]
-if missing:
-    sys.exit("FAIL: keep_history false: no path held the frames stamped %s" % missing)
-worst = 0.0
-for w in want:
-    g = final[round(w[0], 6)]
-    s = 1.0 if sum(a * b for a, b in zip(g[4:], w[4:])) >= 0 else -1.0
-    worst = max([worst] + [abs(a - b) for a, b in zip(g[1:4], w[1:4])] +
-                [abs(s * a - b) for a, b in zip(g[4:], w[4:])])
-if worst > 1e-9:
-    sys.exit("FAIL: keep_history false: final poses differ from jpcr_run's by %g" % worst)
-print("ok: keep_history false: the paths held all %d final poses, equal to %g" % (len(want), worst))
-PY
+same_path "$tmp/forget_path.txt" "$tmp/off_full/trajectory.txt" union ||
+  { echo "FAIL: keep_history false: the paths vs jpcr_run"; cat "$tmp/forget_path.txt"; fail=1; }
 "$node" "${dds[@]}" > "$tmp/term.txt" 2>&1 &
 term_pid=$!; pids+=($term_pid)
 sleep 1.5; kill -TERM $term_pid

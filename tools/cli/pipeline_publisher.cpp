@@ -8,15 +8,22 @@ namespace jpcr::cli {
 
 void PipelinePublisher::attach(PipelineBackEnd& pipeline) {
   if (pipeline.params().keep_history) return;  // trajectory() holds every frame
-  pipeline.set_frame_sink([this](const PipelineFrame&, const StampedPose& refined,
-                                 const FrameVerdicts&) { final_since_path_.push_back(refined); });
+  pipeline.set_frame_sink(
+      [this](const PipelineFrame& frame, const StampedPose& refined, const FrameVerdicts&) {
+        final_since_path_.push_back(refined);
+        final_frames_ = static_cast<std::size_t>(frame.index) + 1;
+      });
 }
 
 void PipelinePublisher::publish_path(const PipelineBackEnd& pipeline) {
   Trajectory path = std::move(final_since_path_);
   final_since_path_.clear();
+  // The pipeline may still hold frames it handed to the sink (it forgets them lazily, and never
+  // the newest): those are in `path` already.
   const Trajectory held = pipeline.trajectory();
-  path.insert(path.end(), held.begin(), held.end());
+  const std::size_t first = pipeline.first_frame();
+  for (std::size_t k = 0; k < held.size(); ++k)
+    if (first + k >= final_frames_) path.push_back(held[k]);
   publisher_.publish_path(path);
 }
 

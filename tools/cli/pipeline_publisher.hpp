@@ -53,7 +53,8 @@ class PipelinePublisher {
   void publish_path(const PipelineBackEnd& pipeline);
 
   DdsResultPublisher publisher_;
-  Trajectory final_since_path_;  // keep_history = false: final frames the pipeline forgot
+  Trajectory final_since_path_;   // keep_history = false: final frames not yet in a path
+  std::size_t final_frames_ = 0;  // ... and frames [0, final_frames_) have gone to the sink
   std::size_t keyframes_seen_ = 0;
   std::size_t keyframes_published_ = 0;
 };

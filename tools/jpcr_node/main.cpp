@@ -101,10 +101,11 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
   // A back end that took keyframes and is no longer matched (it crashed or was killed; Cyclone
   // notices when its lease runs out) cannot chain later ones: they are not sent, the run ends
   // with exit 1, odom goes on until then.
-  bool had_back_end = false;
+  bool had_back_end = false, end_written = false;
   std::string back_end_gone;
   const auto back_end_went_away = [&] {
     if (!back_end_gone.empty()) return true;
+    if (end_written) return false;  // from here a back end that goes has finished
     if (keyframes.matched() > 0) {
       had_back_end = true;
       return false;
@@ -188,6 +189,7 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
   const auto start = node::Clock::now();
   const bool ended =
       keyframes.publish_end(static_cast<int>(outcome.processed), tracked, wait_to_end);
+  end_written = ended;
   if (!ended && !back_end_gone.empty())
     std::cerr << "jpcr_node: end of stream not sent\n";
   else if (!ended)
@@ -315,7 +317,7 @@ int node_main(int argc, char** argv) {
       "refined-so-far pose with the front end's covariance of it, accumulated along its\n"
       "alignments in map axes, zero for the first frame),\n"
       "keyframe_pose + curvature (32FC2) + curvature_color (rgb8) when a keyframe's map is\n"
-      "final, and path (all refined poses, transient local) after every keyframe and at the\n"
+      "final, and path (the refined poses, transient local) after every keyframe and at the\n"
       "end. For unattended runs set pipeline.keep_history: false in --params: each frame is\n"
       "forgotten once its pose is final and published, so memory stays bounded, and each path\n"
       "holds the frames made final since the previous one, then those still held.\n"
