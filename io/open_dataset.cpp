@@ -1,6 +1,8 @@
 #include "jpcr/io/open_dataset.hpp"
 
+#include <cctype>
 #include <filesystem>
+#include <string>
 
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/rawlog_dataset.hpp"
@@ -16,6 +18,10 @@ std::unique_ptr<FrameSource> open_dataset(const std::string& path,
                                           const DatasetParams& params) {
   std::error_code ec;
   if (fs::is_directory(path, ec)) {
+    const fs::path dir(path);
+    if (!fs::exists(dir / "depth.txt", ec) && !fs::exists(dir / "associations.txt", ec))
+      throw InputError(path +
+                       ": not a TUM RGB-D directory (no depth.txt or associations.txt in it)");
     std::optional<CameraIntrinsics> cam = camera;
     const fs::path own = fs::path(path) / "camera.yaml";
     if (!cam && fs::exists(own, ec)) cam = load_camera_yaml(own.string());
@@ -27,7 +33,10 @@ std::unique_ptr<FrameSource> open_dataset(const std::string& path,
     options.max_time_difference = params.max_time_difference;
     return std::make_unique<TumDataset>(path, *cam, options);
   }
-  if (fs::path(path).extension() == ".rawlog") return std::make_unique<RawlogDataset>(path, camera);
+  std::string extension = fs::path(path).extension().string();
+  for (char& c : extension)
+    c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (extension == ".rawlog") return std::make_unique<RawlogDataset>(path, camera);
   if (!fs::exists(path, ec)) throw InputError(path + ": dataset does not exist");
   throw InputError(path +
                    ": not a dataset (expected a TUM RGB-D directory or an MRPT .rawlog file)");

@@ -321,6 +321,19 @@ TEST(RawlogDataset, BadInputNamesTheFile) {
             std::string::npos);
   EXPECT_NE(error_of([&] { open_dataset(kFr1, std::nullopt); }).find("no camera given"),
             std::string::npos);
+  // A directory without the TUM lists is named as such, also with a camera (it was "no camera
+  // given", then a missing depth.txt); a rawlog's extension in capitals is still a rawlog.
+  std::filesystem::create_directory(dir.file("empty"));
+  for (const auto& camera : {std::optional<CameraIntrinsics>{}, std::optional(small_camera())})
+    EXPECT_NE(error_of([&] {
+                open_dataset(dir.file("empty"), camera);
+              }).find("empty: not a TUM RGB-D directory (no depth.txt or associations.txt"),
+              std::string::npos);
+  std::filesystem::copy_file(dir.file("two.rawlog"), dir.file("TWO.RAWLOG"));
+  EXPECT_NE(error_of([&] {
+              open_dataset(dir.file("TWO.RAWLOG"), std::nullopt);
+            }).find("TWO.RAWLOG: not a readable"),
+            std::string::npos);
 }
 
 }  // namespace
