@@ -298,6 +298,24 @@ TEST_F(DdsDepth, AFloodOfBadSamplesIsCountedButLoggedInPart) {
   EXPECT_EQ(std::count(text.begin(), text.end(), '\n'), 10) << text;
 }
 
+// Publishes `count` frames stamped first, first + 1, …, each acknowledged (it reached the
+// subscriber's process), then gives the subscriber's listener time to queue them.
+void publish_acknowledged(DdsDepthPublisher& publisher, double first, int count) {
+  for (int i = 0; i < count; ++i) {
+    publisher.publish(test_frame(first + i));
+    ASSERT_TRUE(publisher.flush(kTimeout));
+  }
+  std::this_thread::sleep_for(milliseconds(200));
+}
+
+// The stamps of every frame the subscriber still has for its caller.
+std::vector<double> drain(DdsDepthSubscriber& subscriber) {
+  std::vector<double> stamps;
+  while (const std::optional<Frame> f = subscriber.wait_frame(milliseconds(300)))
+    stamps.push_back(f->timestamp);
+  return stamps;
+}
+
 // A caller slower than the camera: of 7 frames sent before it asks, the queue (keep last 2)
 // keeps the newest 2; the other 5 are counted and logged, not lost silently in Cyclone.
 TEST_F(DdsDepth, FramesTheCallerIsTooSlowForAreDroppedCountedAndLogged) {
@@ -306,16 +324,8 @@ TEST_F(DdsDepth, FramesTheCallerIsTooSlowForAreDroppedCountedAndLogged) {
   DdsDepthSubscriber subscriber(node_side_, config_, &log);
   DdsDepthPublisher publisher(camera_side_, config_, DepthEncoding::kMetres32);
   ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
-  constexpr int kSent = 7;
-  for (int i = 0; i < kSent; ++i) {
-    publisher.publish(test_frame(1.0 + i));
-    ASSERT_TRUE(publisher.flush(kTimeout));  // acknowledged: it reached the subscriber's process
-  }
-  std::this_thread::sleep_for(milliseconds(200));  // and its listener
-  std::vector<double> stamps;
-  while (const std::optional<Frame> f = subscriber.wait_frame(milliseconds(300)))
-    stamps.push_back(f->timestamp);
-  EXPECT_EQ(stamps, (std::vector<double>{6.0, 7.0}));
+  publish_acknowledged(publisher, 1.0, 7);
+  EXPECT_EQ(drain(subscriber), (std::vector<double>{6.0, 7.0}));
   EXPECT_EQ(subscriber.frames_dropped(), 5u);
   EXPECT_EQ(subscriber.frames_received(), 2u);
   EXPECT_NE(log.str().find("image_raw: dropped 5 frame(s), 5 in all"), std::string::npos)
@@ -334,19 +344,13 @@ TEST_F(DdsDepth, FramesWaitingForASlowCallerStayWithinTheQueue) {
   constexpr int kRounds = 5;
   std::vector<double> stamps;
   for (int round = 0; round < kRounds; ++round) {
-    for (int i = 0; i < 2; ++i) {
-      publisher.publish(test_frame(1.0 + 2 * round + i));
-      ASSERT_TRUE(publisher.flush(kTimeout));
-    }
-    std::this_thread::sleep_for(milliseconds(200));  // in the listener's queue
+    publish_acknowledged(publisher, 1.0 + 2 * round, 2);
     const std::optional<Frame> f = subscriber.wait_frame(milliseconds(300));
     ASSERT_TRUE(f.has_value()) << "round " << round;
     stamps.push_back(f->timestamp);
   }
   EXPECT_LE(subscriber.frames_waiting(), 2u);
-  std::vector<double> left;
-  while (const std::optional<Frame> f = subscriber.wait_frame(milliseconds(300)))
-    left.push_back(f->timestamp);
+  const std::vector<double> left = drain(subscriber);
   EXPECT_LE(left.size(), 2u);  // without the bound: 5
   EXPECT_EQ(stamps.size() + left.size() + subscriber.frames_dropped(), std::size_t{2 * kRounds});
   EXPECT_EQ(subscriber.frames_waiting(), 0u);
