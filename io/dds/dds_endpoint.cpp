@@ -23,6 +23,11 @@ class Qos {
         dds_qset_resource_limits(qos_, q.max_samples, DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
     } else {
       dds_qset_history(qos_, DDS_HISTORY_KEEP_LAST, q.depth);
+      // What a transient-local writer keeps for late joiners is its durability service's
+      // history, KEEP_LAST 1 unless set (as rmw_cyclonedds_cpp sets it): the same depth.
+      if (q.transient_local)
+        dds_qset_durability_service(qos_, 0, DDS_HISTORY_KEEP_LAST, q.depth, DDS_LENGTH_UNLIMITED,
+                                    DDS_LENGTH_UNLIMITED, DDS_LENGTH_UNLIMITED);
     }
     const dds_data_representation_id_t xcdr1[] = {DDS_DATA_REPRESENTATION_XCDR1};
     dds_qset_data_representation(qos_, 1, xcdr1);

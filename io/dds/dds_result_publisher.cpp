@@ -8,12 +8,13 @@
 namespace jpcr {
 
 struct DdsResultPublisher::Writers {
-  Writers(const DdsParticipant& p, const DdsConfig& c)
+  Writers(const DdsParticipant& p, const DdsConfig& c, PathUpdates paths)
       : odometry(p, result_topic_name(c, ResultTopic::kOdometry),
                  result_topic_qos(c, ResultTopic::kOdometry)),
         keyframe_pose(p, result_topic_name(c, ResultTopic::kKeyframePose),
                       result_topic_qos(c, ResultTopic::kKeyframePose)),
-        path(p, result_topic_name(c, ResultTopic::kPath), result_topic_qos(c, ResultTopic::kPath)),
+        path(p, result_topic_name(c, ResultTopic::kPath),
+             result_topic_qos(c, ResultTopic::kPath, paths)),
         curvature(p, result_topic_name(c, ResultTopic::kCurvature),
                   result_topic_qos(c, ResultTopic::kCurvature)),
         curvature_color(p, result_topic_name(c, ResultTopic::kCurvatureColor),
@@ -46,10 +47,10 @@ std::string result_topic_name(const DdsConfig& config, ResultTopic topic) {
   return config.topic_prefix + to_string(topic);
 }
 
-DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic) {
+DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic, PathUpdates paths) {
   switch (topic) {
     case ResultTopic::kPath:
-      return DdsQos{true, true, 1};
+      return DdsQos{true, true, paths == PathUpdates::kWhole ? 1 : config.history_depth};
     case ResultTopic::kCurvature:
     case ResultTopic::kCurvatureColor:
       return DdsQos{true, false, config.image_history_depth};
@@ -59,10 +60,10 @@ DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic) {
 }
 
 DdsResultPublisher::DdsResultPublisher(const DdsParticipant& participant, const DdsConfig& config,
-                                       std::ostream* log)
+                                       std::ostream* log, PathUpdates paths)
     : config_(config),
       log_(log ? log : &std::cerr),
-      writers_(std::make_unique<Writers>(participant, config)) {}
+      writers_(std::make_unique<Writers>(participant, config, paths)) {}
 
 DdsResultPublisher::~DdsResultPublisher() = default;
 

@@ -4,6 +4,7 @@
 //   odom             nav_msgs/Odometry         reliable, volatile, keep last history_depth
 //   keyframe_pose    geometry_msgs/PoseStamped reliable, volatile, keep last history_depth
 //   path             nav_msgs/Path             reliable, transient local, keep last 1
+//                                              (keep last history_depth: PathUpdates::kIncremental)
 //   curvature        sensor_msgs/Image 32FC2   reliable, volatile, keep last image_history_depth
 //   curvature_color  sensor_msgs/Image rgb8    reliable, volatile, keep last image_history_depth
 //
@@ -31,12 +32,19 @@ namespace jpcr {
 
 enum class ResultTopic { kOdometry, kKeyframePose, kPath, kCurvature, kCurvatureColor };
 
+/// What a path holds: the whole refined trajectory (each path supersedes the one before, so the
+/// path topic keeps the last one), or the frames made final since the previous path and those
+/// still held (a pipeline with keep_history = false): then every path carries poses no other
+/// does, and the topic keeps history_depth of them for readers that must take each one.
+enum class PathUpdates { kWhole, kIncremental };
+
 /// "odom", "keyframe_pose", "path", "curvature", "curvature_color".
 const char* to_string(ResultTopic topic);
 /// PREFIX + name.
 std::string result_topic_name(const DdsConfig& config, ResultTopic topic);
 /// The QoS of the table above; readers that want every sample use the same.
-DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic);
+DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic,
+                        PathUpdates paths = PathUpdates::kWhole);
 
 class DdsResultPublisher {
  public:
@@ -44,8 +52,9 @@ class DdsResultPublisher {
   /// later (larger than its MaxSampleSize, out of resources) is not published: it is counted
   /// (writes_failed) and logged to `log` (default std::cerr; the first 10 lines, then one per
   /// 10 s), and publishing goes on: one lost result does not stop the run that makes them.
+  /// `paths` sets the path topic's history (result_topic_qos).
   DdsResultPublisher(const DdsParticipant& participant, const DdsConfig& config,
-                     std::ostream* log = nullptr);
+                     std::ostream* log = nullptr, PathUpdates paths = PathUpdates::kWhole);
   ~DdsResultPublisher();
   DdsResultPublisher(const DdsResultPublisher&) = delete;
   DdsResultPublisher& operator=(const DdsResultPublisher&) = delete;

@@ -70,6 +70,10 @@ TEST_F(DdsResults, TopicNamesAndQosFollowRosConventions) {
             "rt/jpcr/curvature_color");
   const DdsQos path = result_topic_qos(DdsConfig{}, ResultTopic::kPath);
   EXPECT_TRUE(path.reliable && path.transient_local && path.depth == 1);
+  DdsConfig deep;
+  deep.history_depth = 7;
+  const DdsQos increments = result_topic_qos(deep, ResultTopic::kPath, PathUpdates::kIncremental);
+  EXPECT_TRUE(increments.reliable && increments.transient_local && increments.depth == 7);
   EXPECT_FALSE(result_topic_qos(DdsConfig{}, ResultTopic::kOdometry).transient_local);
 }
 
@@ -133,6 +137,37 @@ TEST_F(DdsResults, LateJoinerReceivesTheLastPath) {
   }
   // Depth 1: nothing older follows.
   EXPECT_EQ(path.take([](const RosPath&) {}), 0u);
+}
+
+// keep_history: false publishes each final pose in one path only: a reader with the topic's QoS
+// must get every path published back to back, live or joining late (with a depth-1 path topic a
+// late joiner got the last of 5 and a reader that fell behind lost the ones in between).
+TEST_F(DdsResults, EveryIncrementalPathArrivesLiveAndToALateJoiner) {
+  DdsResultPublisher increments(publisher_side_, config_, nullptr, PathUpdates::kIncremental);
+  const DdsQos qos = result_topic_qos(config_, ResultTopic::kPath, PathUpdates::kIncremental);
+  const std::string topic = result_topic_name(config_, ResultTopic::kPath);
+  DdsReader<RosPath> live(subscriber_side_, topic, qos);
+  ASSERT_TRUE(test::eventually([&] { return increments.matched(ResultTopic::kPath) == 1; }));
+  constexpr int kPaths = 5;
+  for (int i = 0; i < kPaths; ++i)
+    increments.publish_path({some_pose(0.1 * i)});
+  ASSERT_TRUE(increments.flush(kTimeout));
+  DdsReader<RosPath> late(subscriber_side_, topic, qos);
+  for (const DdsReader<RosPath>* reader : {&live, &late}) {
+    std::vector<double> stamps;
+    const auto deadline = std::chrono::steady_clock::now() + kTimeout;
+    while (stamps.size() < kPaths && std::chrono::steady_clock::now() < deadline) {
+      reader->wait(milliseconds(100));
+      reader->take([&](const RosPath& m) {
+        for (const StampedPose& p : trajectory_of(m))
+          stamps.push_back(p.timestamp);
+      });
+    }
+    ASSERT_EQ(stamps.size(), static_cast<std::size_t>(kPaths))
+        << (reader == &late ? "late" : "live");
+    for (int i = 0; i < kPaths; ++i)
+      EXPECT_NEAR(stamps[i], 0.1 * i, 1e-9);
+  }
 }
 
 TEST_F(DdsResults, CurvatureMap640x480ArrivesBitExact) {

@@ -1,5 +1,6 @@
 #include "cli/pipeline_publisher.hpp"
 
+#include <stdexcept>
 #include <utility>
 
 #include "jpcr/io/curvature_colors.hpp"
@@ -7,6 +8,8 @@
 namespace jpcr::cli {
 
 void PipelinePublisher::attach(PipelineBackEnd& pipeline) {
+  if (pipeline.params().keep_history != (path_updates_ == PathUpdates::kWhole))
+    throw std::logic_error("PipelinePublisher: the pipeline's keep_history differs from its own");
   if (pipeline.params().keep_history) return;  // trajectory() holds every frame
   pipeline.set_frame_sink(
       [this](const PipelineFrame& frame, const StampedPose& refined, const FrameVerdicts&) {

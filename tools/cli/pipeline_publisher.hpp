@@ -13,7 +13,9 @@
 //                    keyframe (and so refined), and after finish(). With keep_history = false
 //                    the pipeline forgets each frame once its pose is final: a path then holds
 //                    the frames made final since the previous path (each final pose is
-//                    published once) followed by the frames still held.
+//                    published once) followed by the frames still held, and the path topic
+//                    keeps history_depth paths: a reader must take every one (with its
+//                    depth, result_topic_qos(..., PathUpdates::kIncremental)).
 #pragma once
 
 #include <chrono>
@@ -26,11 +28,14 @@ namespace jpcr::cli {
 
 class PipelinePublisher {
  public:
-  PipelinePublisher(const DdsParticipant& participant, const DdsConfig& config)
-      : publisher_(participant, config) {}
+  /// `keep_history` is the pipeline's (PipelineParams): false makes the paths incremental
+  /// (PathUpdates::kIncremental), kept history_depth deep on the path topic.
+  PipelinePublisher(const DdsParticipant& participant, const DdsConfig& config, bool keep_history)
+      : path_updates_(keep_history ? PathUpdates::kWhole : PathUpdates::kIncremental),
+        publisher_(participant, config, nullptr, path_updates_) {}
 
   /// Before the first frame: with keep_history = false, takes the frames `pipeline` makes final
-  /// (its FrameSink) for the next path.
+  /// (its FrameSink) for the next path. `pipeline` keeps history as the constructor was told.
   void attach(PipelineBackEnd& pipeline);
 
   /// The CurvatureSink body; `pipeline` is the one calling it.
@@ -52,6 +57,7 @@ class PipelinePublisher {
  private:
   void publish_path(const PipelineBackEnd& pipeline);
 
+  PathUpdates path_updates_;
   DdsResultPublisher publisher_;
   Trajectory final_since_path_;   // keep_history = false: final frames not yet in a path
   std::size_t final_frames_ = 0;  // ... and frames [0, final_frames_) have gone to the sink

@@ -96,8 +96,10 @@ int run(int argc, char** argv) {
       .flag("best-effort", "subscribe best effort (matches sensor-data publishers too)");
   cli::add_dds_options(args);
   args.epilog(
-      "Path is read reliable and transient-local (the last path arrives on joining); the other\n"
-      "types reliable and volatile, unless --best-effort.\n\nexample:\n"
+      "Samples are read reliable, keeping dds.history_depth of them, unless --best-effort.\n"
+      "Path is also transient-local (the paths the node keeps arrive on joining: the last one,\n"
+      "or with pipeline.keep_history: false up to history_depth of them); the other types are\n"
+      "volatile.\n\nexample:\n"
       "  jpcr_dds_echo rt/jpcr/odom --count 5 --timeout 10");
   return cli::run_program("jpcr_dds_echo", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -119,7 +121,9 @@ int run(int argc, char** argv) {
     const DdsConfig dds = cli::dds_config_from(args);
     o.qos.depth = dds.history_depth;
     o.qos.reliable = !args.get_flag("best-effort");
-    if (type == "path") o.qos = DdsQos{o.qos.reliable, true, 1};
+    // Transient local for the last path on joining; history_depth deep for the incremental
+    // paths of keep_history: false, each of which carries poses no other path does.
+    if (type == "path") o.qos.transient_local = true;
     const DdsParticipant participant(dds);
     cli::install_stop_signal_handler();
     if (type == "odom") return echo<RosOdometry>(participant, o);

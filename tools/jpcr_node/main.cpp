@@ -48,7 +48,7 @@ std::chrono::milliseconds milliseconds_of(double seconds) {
 // Front end and back end in one process.
 int run_all(const NodeOptions& o, const DdsParticipant& participant) {
   DdsDepthSubscriber subscriber(participant, o.dds);
-  cli::PipelinePublisher publisher(participant, o.dds);
+  cli::PipelinePublisher publisher(participant, o.dds, o.pipeline.keep_history);
   std::optional<KeyframePipeline> runner;
   runner.emplace(
       o.pipeline,
@@ -220,7 +220,7 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
 // The back-end process: keyframes in, J-ftf / J-full, re-anchoring, results out.
 int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
   DdsKeyframeReader reader(participant, o.dds);
-  cli::PipelinePublisher publisher(participant, o.dds);
+  cli::PipelinePublisher publisher(participant, o.dds, o.pipeline.keep_history);
   std::optional<PipelineBackEnd> back_end;
   back_end.emplace(
       o.pipeline,

@@ -109,7 +109,7 @@ int run_main(int argc, char** argv) {
     if (args.get_flag("dds")) {
       const DdsConfig config = cli::dds_config_from(args);
       participant.emplace(config);
-      dds.emplace(*participant, config);
+      dds.emplace(*participant, config, pipeline.keep_history);
     }
 #endif
     const KeyframePipeline* self = nullptr;
