@@ -248,7 +248,10 @@ RefinementResult IcpBundle::refine(const std::vector<VertexMap>& vertices,
     problem.SetParameterBlockConstant(blocks[0].data());
     for (int k = 1; k < M; ++k)
       if (connected[k] && terms[k] == 0) problem.SetParameterBlockConstant(blocks[k].data());
-    if (total == 0) break;
+    if (total == 0) {  // no pair left at the solved poses: every frame is isolated below
+      report.terms = 0;
+      break;
+    }
 
     ceres::Solver::Summary summary;
     ceres::Solve(options, &problem, &summary);
@@ -273,7 +276,11 @@ RefinementResult IcpBundle::refine(const std::vector<VertexMap>& vertices,
     }
   }
 
-  // Frames left as given: not connected to the reference, or without terms at the end.
+  // Frames the last association found no terms for are returned as given: not connected to the
+  // reference, or whose every pair fell below min_pair_terms at the poses the solves reached.
+  // A solve that took a frame where nothing pairs with it left no sign that the pose is better
+  // than the given one (measured: from 30 mm to 47 mm off). The other frames' last solve had no
+  // term of theirs, so it did not depend on where they were held.
   for (int k = 1; k < M; ++k) {
     report.seen[k - 1] = terms[k];
     if (!connected[k] || terms[k] == 0) {

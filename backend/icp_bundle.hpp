@@ -8,9 +8,10 @@
 //   RefinementResult r = bundle.refine(frames, initial_poses);  // frames[0] is the reference
 //
 // A frame that overlaps no frame connected to the reference (overlap test by projection at the
-// initial poses), or that a solve finds tied to it by no pair with min_pair_terms
-// correspondences, is reported in report.isolated with the verdict no_overlap, and its pose is
-// returned as given; the connected frames are still refined. A window whose last solve does
+// initial poses), or that the last association finds tied to it by no pair with min_pair_terms
+// correspondences (a solve took it where nothing pairs with it), is reported in report.isolated
+// with the verdict no_overlap, and its pose is returned as given; the connected frames are still
+// refined. A window whose last solve does
 // not observe every solved pose (report.degeneracy below params.degeneracy_threshold: one
 // plane) is `degenerate`. ICP-bundle estimates no quadrics (RefinementResult::quadrics is
 // empty) and no covariance (zero blocks); refines_quadrics() is false.

@@ -60,7 +60,8 @@ struct RefinementReport {
   std::vector<int> seen;           // per pose T_2 … T_M: active quadrics that frame sees;
                                    // icp-bundle: residuals that involve the frame
   long terms = 0;                  // residual terms inside the gate at the end
-  std::vector<int> isolated;       // icp-bundle: frames (window index) left as given
+  std::vector<int> isolated;       // icp-bundle: frames (window index) without terms at the
+                                   // end (no_overlap), returned as given
   double residual_variance = 0.0;  // m²: final cost / (terms − unknowns)
   /// Terms per distinct sample (terms / (active quadrics + Σ seen), about the number of
   /// neighbourhoods each sample falls in): the factor by which the covariance is inflated.

@@ -1,6 +1,8 @@
 // ICP-bundle (method.md §9): a frame that overlaps no other, the gauge, the analytic Jacobian of
 // the point-to-plane cost against Ceres' numeric one, and bad input. Whole windows and the
 // pipeline are in test_icp_bundle_windows.cpp.
+#include <algorithm>
+#include <array>
 #include <cstdio>
 #include <random>
 
@@ -9,6 +11,7 @@
 
 #include "joint_test_windows.hpp"
 #include "jpcr/backend/icp_bundle.hpp"
+#include "jpcr/backend/icp_bundle_association.hpp"
 #include "jpcr/backend/point_to_plane_cost.hpp"
 #include "jpcr/quadric/error.hpp"
 
@@ -86,6 +89,43 @@ TEST(IcpBundle, FramesTiedToTheGaugeByNoSolvedPairAreHeld) {
   EXPECT_EQ(r.report.isolated, (std::vector<int>{1, 2}));
   for (int j = 0; j < 3; ++j)
     EXPECT_TRUE(bitwise_equal(r.poses[j], start[j])) << "pose " << j;
+}
+
+// Two frames that see the room through the same 16-px strip of columns, frame 1 started where
+// the reference is (3 cm / 1° off): the strips pair pixel for pixel there, and fewer pairs
+// survive at the true motion (measured 110 and 110 against 84 and 87). With min_pair_terms
+// between the two the first solve has its pairs, but it takes frame 1 where none is left
+// (measured 47 mm / 1.0° off, farther than the start): frame 1 is isolated (no_overlap) and
+// returned as given, and the window says no term is left.
+TEST(IcpBundle, AFrameASolveTakesWhereNothingPairsIsReturnedAsGiven) {
+  const JointTestWindow w = render_window(2, 160);
+  std::vector<VertexMap> strips = w.vertices;
+  for (VertexMap& v : strips)
+    for (int y = 0; y < v.height(); ++y)
+      for (int x = 0; x < v.width(); ++x)
+        if (x < 70 || x >= 86) v(x, y) = invalid_vector();
+  IcpBundleParams p;
+  const BundleFrame f0 = make_bundle_frame(strips[0], p), f1 = make_bundle_frame(strips[1], p);
+  const auto pairs = [&](const Eigen::Isometry3d& T_1) {  // terms of (0, 1) and (1, 0)
+    return std::array<std::size_t, 2>{
+        associate_pair(f0, f1, T_1.inverse(), w.camera, p).correspondences.size(),
+        associate_pair(f1, f0, T_1, w.camera, p).correspondences.size()};
+  };
+  const auto at_start = pairs(Eigen::Isometry3d::Identity()), at_truth = pairs(w.truth[1]);
+  std::printf("pair terms at the start %zu, %zu; at the truth %zu, %zu\n", at_start[0], at_start[1],
+              at_truth[0], at_truth[1]);
+  p.min_pair_terms = static_cast<int>(std::max(at_truth[0], at_truth[1])) + 1;
+  ASSERT_LE(p.min_pair_terms, static_cast<int>(std::min(at_start[0], at_start[1])));
+  const std::vector<Eigen::Isometry3d> start(2, Eigen::Isometry3d::Identity());
+  const RefinementResult r = IcpBundle(p).refine(strips, w.camera, start);
+  print_report(r.report);
+  EXPECT_EQ(r.report.verdict, RefinementVerdict::kNoOverlap) << to_string(r.report.verdict);
+  EXPECT_EQ(r.report.isolated, std::vector<int>{1});
+  EXPECT_EQ(r.report.seen[0], 0);
+  EXPECT_EQ(r.report.terms, 0);
+  EXPECT_EQ(r.report.cost.size(), 2u);  // one solve
+  EXPECT_TRUE(bitwise_equal(r.poses[1], start[1]));
+  EXPECT_EQ(r.report.residual_variance, 0.0);
 }
 
 // Ceres' GradientChecker differentiates Evaluate numerically and compares both Jacobians in the

@@ -35,7 +35,7 @@ void write_refinement(JsonWriter& json, const char* name,
       .field("rotation_sd_rad", r->rotation_sd)
       .field("step_translation_sd_m", r->step_translation_sd)  // successive frames
       .field("step_rotation_sd_rad", r->step_rotation_sd)
-      .field("isolated_frames",  // icp-bundle: window frames left as given (no overlap)
+      .field("isolated_frames",  // icp-bundle: window frames without terms at the end
              std::vector<double>(r->isolated.begin(), r->isolated.end()));
   if (!r->error.empty()) json.field("error", r->error);  // verdict "error": what was thrown
   json.end_object();
