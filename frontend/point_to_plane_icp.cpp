@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <vector>
 
 #include <Eigen/Cholesky>
@@ -42,15 +43,10 @@ double normal_noise(double kept_mean, double max_angle_deg) {
   return 0.5 * (lo + hi);
 }
 
-// Final statistics of an alignment from its last normal equations (max_normal_angle: the pairs'
-// normal-angle test, deg).
-void describe(const NormalEquations& eq, double max_normal_angle, IcpResult& r) {
-  r.inliers = eq.inliers;
-  r.inlier_ratio = eq.valid > 0 ? static_cast<double>(eq.inliers) / eq.valid : 0.0;
-  r.rms = eq.inliers > 0 ? std::sqrt(eq.sum_squares / eq.inliers) : 0.0;
+// λmin / λmax of one linearisation's JᵀWJ, unit-free and without the normals' noise
+// (max_normal_angle: the pairs' normal-angle test, deg); 0 without pairs.
+double noise_corrected_degeneracy(const NormalEquations& eq, double max_normal_angle) {
   const Matrix6d H = eq.hessian();
-  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(H);
-  r.eigenvalues = eig.eigenvalues();
   // The degeneracy sees the geometry, not the normals' noise. J = B n with B = [I; [p]×]; with
   // n = (n̄ + δ) / |n̄ + δ|, δ tangent of variance σ² per axis, E[n nᵀ] = (1 − 3σ²) n̄ n̄ᵀ + σ² I
   // to second order, so E[H] = (1 − 3σ²) H̄ + σ² Σ w B Bᵀ: noisy normals of one plane read as
@@ -84,8 +80,20 @@ void describe(const NormalEquations& eq, double max_normal_angle, IcpResult& r) 
     const Eigen::SelfAdjointEigenSolver<Matrix6d> scaled(d.asDiagonal() * G * d.asDiagonal(),
                                                          Eigen::EigenvaluesOnly);
     const Vector6d l = scaled.eigenvalues();
-    r.degeneracy = l[5] > 0.0 ? std::max(l[0], 0.0) / l[5] : 0.0;
+    return l[5] > 0.0 ? std::max(l[0], 0.0) / l[5] : 0.0;
   }
+  return 0.0;
+}
+
+// Final statistics of an alignment from its last normal equations (max_normal_angle: the pairs'
+// normal-angle test, deg).
+void describe(const NormalEquations& eq, double max_normal_angle, IcpResult& r) {
+  r.inliers = eq.inliers;
+  r.inlier_ratio = eq.valid > 0 ? static_cast<double>(eq.inliers) / eq.valid : 0.0;
+  r.rms = eq.inliers > 0 ? std::sqrt(eq.sum_squares / eq.inliers) : 0.0;
+  const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(eq.hessian());
+  r.eigenvalues = eig.eigenvalues();
+  r.degeneracy = noise_corrected_degeneracy(eq, max_normal_angle);
   const double lmax = std::max(r.eigenvalues[5], 1e-300);
   const Vector6d inv = r.eigenvalues.cwiseMax(1e-12 * lmax).cwiseInverse();
   // σ² of a unit-weight residual: Σ w e² over the residuals' degrees of freedom. Not Σ w − 6:
@@ -285,6 +293,11 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
   int last_stride = 1;
   bool have_system = false;
   Vector6d last_step = Vector6d::Zero();
+  // The smallest degeneracy of the levels' last linearisations: a coarse level's normals are
+  // far less noisy (block-averaged depth, a longer metric baseline), and its geometry is the
+  // scene's; at 640x480 under 1 % range noise the finest level's correction leaves a plane
+  // or a wall and a floor reading as well observed as a room (IcpResult::degeneracy).
+  double coarse_degeneracy = std::numeric_limits<double>::infinity();
   for (int l = coarsest; l >= 0; --l) {
     const int iterations = params.iterations[l];
     if (iterations <= 0) continue;
@@ -324,9 +337,13 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
         break;
       }
     }
+    if (l > 0)
+      coarse_degeneracy =
+          std::min(coarse_degeneracy, noise_corrected_degeneracy(last, params.max_normal_angle));
   }
   if (have_system) {
     describe(last, params.max_normal_angle, result);
+    result.degeneracy = std::min(result.degeneracy, coarse_degeneracy);
     // Filtered depth: the residuals' errors are shared between neighbouring pixels (both
     // frames' noise enters each residual; each frame's filter counts for its half).
     if (last.inliers > 0)

@@ -178,30 +178,41 @@ TEST(PointToPlaneIcp, InvariantToTheInitialGuessDirection) {
 // Noise in the per-pixel normals used to make a plane look observable: degeneracy 0.0035 at
 // range noise 0.25 %, 0.0037 under Kinect noise and 0.024 at 1 % (a room reads 0.011 at 1 %).
 // describe() takes the normals' expected noise term out of JᵀWJ, with σ² from the pairs' own
-// normal disagreement; the room under the same noise stays observed (measured 1.03e-2).
+// normal disagreement; the room under the same noise stays observed (measured 1.03e-2). At
+// 640x480 the finest level's normals are too noisy for that correction (the wall below read
+// 3.2e-3 at 1 %, ok): the verdict takes the smallest degeneracy over the levels that ran, and
+// the coarse levels see the plane (0) and the room (9.9e-3) as they are.
 TEST(PointToPlaneIcp, ASinglePlaneWithNoisyNormalsIsStillDegenerate) {
   SyntheticScene plane;
   plane.surfaces = {Plane{Eigen::Vector3d(0, 2, 0), Eigen::Vector3d(0, -1, 0)}};
-  const Eigen::Isometry3d T_wt = test::look_from({0, 0, 1}, {0.3, 2, 1.1});
   const Eigen::Isometry3d delta = test::motion(0.01, 1.0 * kDeg);
-  const CameraIntrinsics camera = synthetic_camera(320, 240);
-  const auto noisy = [&](const SyntheticScene& scene, const Eigen::Isometry3d& T_wc,
-                         const char* noise, std::uint64_t frame) {
-    return preprocess(render(scene, camera, T_wc, parse_noise(noise), 7, frame).frame);
-  };
-  for (const char* noise : {"range:0.25", "range:1", "kinect"}) {
-    const IcpResult r =
-        align_point_to_plane(noisy(plane, T_wt * delta, noise, 1), noisy(plane, T_wt, noise, 0),
-                             Eigen::Isometry3d::Identity());
-    std::printf("plane, %s: %s, degeneracy %.3g\n", noise, to_string(r.verdict), r.degeneracy);
-    EXPECT_EQ(r.verdict, IcpVerdict::degenerate) << noise << ": " << r.degeneracy;
+  for (const int width : {320, 640}) {
+    // At 640 px the wall 1.5 m ahead (configs/scenes/single_plane.yaml): seen obliquely from
+    // 2.3 m, too few pairs pass the normal test at 1 % to judge the motion (too_few_points).
+    const Eigen::Isometry3d T_wt = width == 320 ? test::look_from({0, 0, 1}, {0.3, 2, 1.1})
+                                                : test::look_from({0, 0.5, 1}, {0, 2, 1});
+    const CameraIntrinsics camera = synthetic_camera(width, width * 3 / 4);
+    const auto noisy = [&](const SyntheticScene& scene, const Eigen::Isometry3d& T_wc,
+                           const char* noise, std::uint64_t frame) {
+      return preprocess(render(scene, camera, T_wc, parse_noise(noise), 7, frame).frame);
+    };
+    for (const char* noise : {"range:0.25", "range:1", "kinect"}) {
+      const IcpResult r =
+          align_point_to_plane(noisy(plane, T_wt * delta, noise, 1), noisy(plane, T_wt, noise, 0),
+                               Eigen::Isometry3d::Identity());
+      std::printf("plane, %d px, %s: %s, degeneracy %.3g\n", width, noise, to_string(r.verdict),
+                  r.degeneracy);
+      EXPECT_EQ(r.verdict, IcpVerdict::degenerate)
+          << width << " px, " << noise << ": " << r.degeneracy;
+    }
+    const IcpResult room = align_point_to_plane(
+        noisy(test::room(), test::room_view() * delta, "range:1", 1),
+        noisy(test::room(), test::room_view(), "range:1", 0), Eigen::Isometry3d::Identity());
+    std::printf("room, %d px, range:1: %s, degeneracy %.3g\n", width, to_string(room.verdict),
+                room.degeneracy);
+    EXPECT_EQ(room.verdict, IcpVerdict::ok) << width << " px: " << to_string(room.verdict);
+    EXPECT_GT(room.degeneracy, 3.0 * IcpParams{}.degeneracy_threshold) << width << " px";
   }
-  const IcpResult room = align_point_to_plane(
-      noisy(test::room(), test::room_view() * delta, "range:1", 1),
-      noisy(test::room(), test::room_view(), "range:1", 0), Eigen::Isometry3d::Identity());
-  std::printf("room, range:1: %s, degeneracy %.3g\n", to_string(room.verdict), room.degeneracy);
-  EXPECT_EQ(room.verdict, IcpVerdict::ok) << to_string(room.verdict);
-  EXPECT_GT(room.degeneracy, 3.0 * IcpParams{}.degeneracy_threshold);
 }
 
 TEST(PointToPlaneIcp, ASinglePlaneIsDegenerate) {
