@@ -179,6 +179,7 @@ NormalLookup normals_for(const FramePyramid& pyramid, int level) {
 }
 
 FramePyramid preprocess(const Frame& frame, const PreprocessParams& params, RowPool* pool) {
+  params.validate();  // a library caller's parameters
   try {
     frame.camera.validate();
   } catch (const std::invalid_argument& e) {

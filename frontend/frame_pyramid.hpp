@@ -54,9 +54,9 @@ struct NormalLookup {
 };
 NormalLookup normals_for(const FramePyramid& pyramid, int level);
 
-/// Throws InputError when the depth image size differs from the camera's, or the camera is
-/// invalid. NaN, Inf and negative depths read as "no measurement".
-/// `pool` spreads the rows over threads; null runs on the calling thread.
+/// Throws InputError when the depth image size differs from the camera's, the camera is
+/// invalid, or PreprocessParams::validate refuses `params`. NaN, Inf and negative depths read as
+/// "no measurement". `pool` spreads the rows over threads; null runs on the calling thread.
 FramePyramid preprocess(const Frame& frame, const PreprocessParams& params = {},
                         RowPool* pool = nullptr);
 

@@ -4,12 +4,14 @@
 #include <cmath>
 #include <iterator>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 #include "jpcr/frontend/point_to_plane_residual.hpp"
+#include "jpcr/quadric/error.hpp"
 #include "jpcr/quadric/se3.hpp"
 
 namespace jpcr {
@@ -205,6 +207,9 @@ NormalEquations linearize_point_to_plane(const FramePyramid& source_pyramid,
                                          const FramePyramid& target_pyramid, int level,
                                          const Eigen::Isometry3d& T, const IcpParams& params,
                                          int stride, RowPool* pool) {
+  if (stride < 1)
+    throw InputError("linearize_point_to_plane: stride " + std::to_string(stride) +
+                     " must be at least 1");
   const PyramidLevel& source = source_pyramid.levels.at(level);
   const PyramidLevel& target = target_pyramid.levels.at(level);
   const NormalLookup source_normals = normals_for(source_pyramid, level);
@@ -273,6 +278,7 @@ NormalEquations linearize_point_to_plane(const FramePyramid& source_pyramid,
 IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& target,
                                const Eigen::Isometry3d& initial, const IcpParams& params,
                                RowPool* pool) {
+  params.validate();  // a library caller's parameters (a stride of 0 divided by zero)
   IcpResult result;
   result.pose = initial;
   const int levels = std::min<int>(source.levels.size(), target.levels.size());

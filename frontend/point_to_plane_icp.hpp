@@ -61,14 +61,16 @@ struct IcpResult {
 };
 
 /// Aligns `source` to `target` starting from `initial` (source → target). `pool` spreads the
-/// pixels over threads; null runs on the calling thread.
+/// pixels over threads; null runs on the calling thread. Throws InputError for parameters that
+/// IcpParams::validate refuses.
 IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& target,
                                const Eigen::Isometry3d& initial, const IcpParams& params = {},
                                RowPool* pool = nullptr);
 
 /// One pass of association and reduction at one level: every stride-th source pixel is mapped
 /// with T, projected into the target, paired with the target vertex and normal there, rejected
-/// by distance and normal angle, weighted, and added to the normal equations.
+/// by distance and normal angle, weighted, and added to the normal equations. Throws
+/// InputError for a stride below 1.
 NormalEquations linearize_point_to_plane(const FramePyramid& source, const FramePyramid& target,
                                          int level, const Eigen::Isometry3d& T,
                                          const IcpParams& params, int stride = 1,

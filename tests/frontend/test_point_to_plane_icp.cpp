@@ -9,6 +9,7 @@
 
 #include "jpcr/frontend/point_to_plane_icp.hpp"
 #include "jpcr/io/synthetic_noise.hpp"
+#include "jpcr/quadric/error.hpp"
 #include "synthetic_views.hpp"
 
 namespace jpcr {
@@ -26,6 +27,20 @@ Pair render_pair(const SyntheticScene& scene, const Eigen::Isometry3d& T_wt,
                  const Eigen::Isometry3d& delta) {
   return {preprocess(test::render_at(scene, T_wt * delta)),
           preprocess(test::render_at(scene, T_wt)), delta};
+}
+
+// The free functions are a library's entry points: parameters the YAML loader would refuse are
+// refused there too, not divided by (a level-0 stride of 0 ended the process with SIGFPE).
+TEST(PointToPlaneIcp, RefusesParametersItsValidateRefuses) {
+  const Pair pair = render_pair(test::room(), test::room_view(), test::motion(0.02, 2.0 * kDeg));
+  IcpParams no_stride;
+  no_stride.level0_stride = 0;
+  EXPECT_THROW(align_point_to_plane(pair.source, pair.target, pair.truth, no_stride), InputError);
+  EXPECT_THROW(linearize_point_to_plane(pair.source, pair.target, 0, pair.truth, IcpParams{}, 0),
+               InputError);
+  PreprocessParams no_offset;
+  no_offset.normal_offset = 0;
+  EXPECT_THROW(preprocess(test::render_at(test::room(), test::room_view()), no_offset), InputError);
 }
 
 TEST(PointToPlaneIcp, RecoversAKnownMotionOnNoiseFreeData) {
