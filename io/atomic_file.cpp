@@ -30,9 +30,16 @@ void write_file_atomically(const std::string& path,
     {
       std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
       if (!out) throw InputError(path + ": cannot be written (" + std::strerror(errno) + ")");
+      const auto failed = [&](int error) {
+        return InputError(path + ": write failed (" +
+                          (error != 0 ? std::strerror(error) : "disk full or I/O error") + ")");
+      };
+      errno = 0;
       write(out);
-      out.flush();
-      if (!out) throw InputError(path + ": write failed (disk full?)");
+      if (!out) throw failed(errno);
+      // Closed here, not by the destructor: a delayed write error (NFS, a quota) shows at close.
+      out.close();
+      if (!out) throw failed(errno);
     }
     if (std::rename(tmp.c_str(), path.c_str()) != 0) {
       throw InputError(path + ": cannot be renamed into place (" + std::strerror(errno) + ")");

@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <iterator>
 #include <stdexcept>
@@ -75,13 +76,28 @@ StagedOutput::StagedOutput(std::string target, std::vector<std::string> layout)
     if (name.empty() || name[0] == '.' || name.find('/') != std::string::npos)
       throw std::invalid_argument("StagedOutput: layout name '" + name +
                                   "' must be a plain, visible file name");
+  // An existing target that this process may not write would fail at commit(), after the whole
+  // run: refused now.
+  if (fs::is_directory(t, ec) && ::access(t.c_str(), W_OK | X_OK) != 0)
+    throw InputError(target_ + ": cannot write the output here (" + std::strerror(errno) + ")");
   staging_ = (parent / (prefix + std::to_string(::getpid()))).string();
   fs::remove_all(staging_, ec);
   try {
     ensure_directory(staging_);
-  } catch (const InputError& e) {  // name the output the user gave, not the staging directory
-    throw InputError(target_ + ": cannot write the output here (staging directory " + e.what() +
-                     ")");
+  } catch (const InputError& e) {
+    // A writable target in a parent this process may not write (a user's directory in a
+    // shared one): staged inside the target, which is all commit() needs.
+    if (parent != t && fs::is_directory(t, ec)) {
+      remove_abandoned_staging(t, prefix, t);
+      staging_ = (t / (prefix + std::to_string(::getpid()))).string();
+      fs::remove_all(staging_, ec);
+    }
+    try {
+      ensure_directory(staging_);
+    } catch (const InputError&) {  // name the output the user gave, not the staging directory
+      throw InputError(target_ + ": cannot write the output here (staging directory " + e.what() +
+                       ")");
+    }
   }
 }
 
@@ -132,20 +148,33 @@ void StagedOutput::commit() {
   const fs::path previous = fs::path(staging_) / kPrevious;
   ensure_directory(previous.string());
   std::vector<std::string> moved_aside, moved_in;
-  // Puts the moved-aside entries back; the ones that cannot go back stay in `previous`, which
-  // is then kept (not removed with the staging directory) and named in the error.
+  // Puts the moved-aside entries back; the ones that cannot go back stay in `previous`. This
+  // run's outputs go back into the staging directory, which is kept (not removed when the run
+  // fails) and named in the error: a run of hours is not lost to a target it cannot replace.
   const auto roll_back = [&]() -> std::string {
     std::error_code ec;
-    for (const std::string& name : moved_in)
-      fs::remove_all(fs::path(target_) / name, ec);
+    for (const std::string& name : moved_in) {
+      fs::rename(fs::path(target_) / name, fs::path(staging_) / name, ec);
+      if (ec) fs::remove_all(fs::path(target_) / name, ec);
+    }
     bool all_back = true;
     for (const std::string& name : moved_aside) {
       fs::rename(previous / name, fs::path(target_) / name, ec);
       all_back = all_back && !ec;
     }
-    if (all_back) return "; the earlier outputs in " + target_ + " are kept as they were";
+    if (all_back) fs::remove(previous, ec);
+    // Visible, and out of the reach of the next run's sweep of abandoned staging directories.
     keep_staging_ = true;
-    return "; some earlier outputs could not be put back and are kept in " + previous.string();
+    const fs::path staged(staging_);
+    const std::string name = fs::path(target_).lexically_normal().filename().string();
+    const fs::path kept = staged.parent_path() / ((name.empty() ? "output" : name) + ".unsaved-" +
+                                                  std::to_string(::getpid()));
+    fs::rename(staged, kept, ec);
+    if (!ec) staging_ = kept.string();
+    const std::string outputs = "; this run's outputs are kept in " + staging_;
+    if (all_back) return "; the earlier outputs in " + target_ + " are kept as they were" + outputs;
+    return "; some earlier outputs could not be put back and are kept in " +
+           (fs::path(staging_) / kPrevious).string() + outputs;
   };
   std::error_code ec;
   for (const std::string& name : names) {

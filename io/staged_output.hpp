@@ -23,13 +23,14 @@ namespace jpcr {
 
 class StagedOutput {
  public:
-  /// `target`: the output directory (created at commit when missing; its parent now). `layout`:
+  /// `target`: the output directory (created at commit when missing; its parent now); staged
+  /// beside it, or inside it when that is the only place this process may write. `layout`:
   /// every top-level name the program may write there; commit() removes each of them from the
   /// target, staged this time or not, so no output of an earlier run survives beside the new
   /// ones, and leaves every other entry alone. Empty `layout`: the names staged this time.
-  /// Throws InputError naming `target` when it is empty, exists and is not a directory, or its
-  /// parent cannot be created. The parent directories it creates are removed again (when still
-  /// empty) unless commit() succeeds.
+  /// Throws InputError naming `target` when it is empty, exists and is not a directory or may
+  /// not be written by this process, or its parent cannot be created. The parent directories it
+  /// creates are removed again (when still empty) unless commit() succeeds.
   StagedOutput(std::string target, std::vector<std::string> layout);
   ~StagedOutput();  // removes the staging directory unless committed
   StagedOutput(const StagedOutput&) = delete;
@@ -65,7 +66,8 @@ class StagedOutput {
 
   /// Moves the staged entries into the target (same file system: renames), all or nothing:
   /// when an entry cannot be replaced, the ones already moved go back and the target is left as
-  /// it was. Throws InputError naming that entry.
+  /// it was, and this run's outputs are kept beside it in `NAME.unsaved-PID` (directory() then
+  /// names it). Throws InputError naming that entry and where the outputs are.
   void commit();
 
  private:
@@ -73,7 +75,7 @@ class StagedOutput {
   std::vector<std::string> layout_;
   std::vector<std::string> created_;  // the target's missing ancestors, made here, deepest last
   bool committed_ = false;
-  bool keep_staging_ = false;  // a failed roll back left earlier outputs in it
+  bool keep_staging_ = false;  // a failed commit left this run's outputs (and earlier) in it
 };
 
 /// Throws InputError when `target` is `input` itself (the same directory after links and ".."),

@@ -53,21 +53,10 @@ void write_text(const std::string& path, const std::string& text) {
   write_file_atomically(path, [&](std::ostream& out) { out << text; });
 }
 
-}  // namespace
-
-std::string format_stamp(double timestamp) {
-  char text[64];
-  std::snprintf(text, sizeof(text), "%.6f", timestamp);
-  return text;
-}
-
-void write_synthetic_sequence(const SyntheticSequence& sequence, const std::string& directory,
-                              const SyntheticWriterOptions& options) {
-  check_directory(directory, options.force);
-  // Written whole or not at all: into a staging directory, moved into `directory` at the end
-  // (with force, the entries written replace those of the same names there).
-  StagedOutput out(directory, {});
-  const fs::path dir(out.directory());
+// The frames, lists, trajectory and camera of `sequence` into `dir` (staging); errors of the
+// frames' consistency name `directory`.
+void write_staged_sequence(const SyntheticSequence& sequence, const fs::path& dir,
+                           const std::string& directory, const SyntheticWriterOptions& options) {
   for (const char* sub : {"depth", "rgb", "curvature", "normals"})
     ensure_directory((dir / sub).string());
   const CameraIntrinsics& camera = sequence.camera();
@@ -107,6 +96,25 @@ void write_synthetic_sequence(const SyntheticSequence& sequence, const std::stri
   write_text((dir / "camera.yaml").string(),
              "# " + sequence.description() + "\n" + format_camera_yaml(camera));
   write_text((dir / "depth.txt").string(), file_list(stamps, "depth", ".png", options.comment));
+}
+
+}  // namespace
+
+std::string format_stamp(double timestamp) {
+  char text[64];
+  std::snprintf(text, sizeof(text), "%.6f", timestamp);
+  return text;
+}
+
+void write_synthetic_sequence(const SyntheticSequence& sequence, const std::string& directory,
+                              const SyntheticWriterOptions& options) {
+  check_directory(directory, options.force);
+  // Written whole or not at all: into a staging directory, moved into `directory` at the end
+  // (with force, the entries written replace those of the same names there).
+  StagedOutput out(directory, {});
+  const fs::path dir(out.directory());
+  // Its errors name `directory`, the user's, not the staging directory gone when they read it.
+  out.write([&] { write_staged_sequence(sequence, dir, directory, options); });
   out.commit();
 }
 

@@ -166,9 +166,47 @@ TEST(StagedOutput, ACommitThatCannotReplaceAnEntryLeavesTheTargetAsItWas) {
     unpin(target + "/curvature");
     EXPECT_NE(std::string(e.what()).find(target + "/curvature: cannot replace"), std::string::npos)
         << e.what();
+    // This run's outputs are not lost: they wait beside the target, named in the error.
+    const std::string kept = dir.file("run.unsaved-" + std::to_string(::getpid()));
+    EXPECT_NE(std::string(e.what()).find("this run's outputs are kept in " + kept),
+              std::string::npos)
+        << e.what();
   }
   expect_earlier_run(target, "a_report.json", "curvature");
   EXPECT_FALSE(fs::exists(target + "/curvature/new.npy"));
+  const std::string kept = dir.file("run.unsaved-" + std::to_string(::getpid()));
+  EXPECT_EQ(out.directory(), kept);
+  EXPECT_EQ(read_file(kept + "/a_report.json"), "this run's report");
+  EXPECT_EQ(read_file(kept + "/curvature/new.npy"), "this run's map");
+  EXPECT_FALSE(fs::exists(kept + "/.previous"));
+  // The next run for the target leaves them alone (not an abandoned staging directory).
+  { StagedOutput next(target, {"a_report.json", "curvature"}); }
+  EXPECT_TRUE(fs::exists(kept + "/a_report.json"));
+}
+
+// An existing target this process may not write is refused before the run, not at commit();
+// one it may write inside a parent it may not is staged inside the target. Permissions bind
+// only a user other than root.
+TEST(StagedOutput, WritabilityOfTheTargetDecidesBeforeTheRun) {
+  if (::geteuid() == 0) GTEST_SKIP() << "root is not bound by permissions";
+  test::TempDir dir;
+  const std::string locked = dir.file("locked");
+  write_earlier_run(locked, "a_report.json", "curvature");
+  fs::permissions(locked, fs::perms::owner_read | fs::perms::owner_exec);
+  EXPECT_THROW(StagedOutput(locked, {"a_report.json"}), InputError);
+  fs::permissions(locked, fs::perms::owner_all);
+  const std::string shared = dir.file("shared"), mine = shared + "/mine";
+  fs::create_directories(mine);
+  fs::permissions(shared, fs::perms::owner_read | fs::perms::owner_exec);
+  {
+    StagedOutput out(mine, {"a_report.json"});
+    EXPECT_EQ(fs::path(out.directory()).parent_path(), fs::path(mine));
+    write(out.path("a_report.json"), "this run's report");
+    out.commit();
+  }
+  fs::permissions(shared, fs::perms::owner_all);
+  EXPECT_EQ(read_file(mine + "/a_report.json"), "this run's report");
+  EXPECT_EQ(std::distance(fs::directory_iterator(mine), fs::directory_iterator()), 1);
 }
 
 TEST(StagedOutput, EmptyLayoutMovesWhatWasStaged) {

@@ -1,6 +1,10 @@
 // The TUM layout written by the generator reads back through the foundation's TUM reader with
 // the exact poses, the depth to PNG quantisation, and the ground-truth maps bit for bit.
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 
@@ -109,6 +113,29 @@ TEST(SyntheticWriter, RefusesANonEmptyDirectoryUnlessForced) {
   EXPECT_TRUE(std::filesystem::exists(dir.file("out/notes.txt")));  // left alone
   const std::string file = dir.write("file", "x");
   EXPECT_THROW(write_synthetic_sequence(seq, file), InputError);
+}
+
+// A full disk (a 64 kB tmpfs, as root) mid-sequence: the error names the output the user gave
+// (it named the staging directory, removed by the time they read it) and nothing is left.
+TEST(SyntheticWriter, AFailedWriteNamesTheOutputDirectory) {
+  test::TempDir dir;
+  const std::string mounted = dir.file("small");
+  std::filesystem::create_directories(mounted);
+  if (::geteuid() != 0 ||
+      std::system(("mount -t tmpfs -o size=64k tmpfs '" + mounted + "' 2>/dev/null").c_str()) != 0)
+    GTEST_SKIP() << "cannot mount a tmpfs here";
+  std::string error;
+  try {
+    write_synthetic_sequence(small_sequence("none", TrajectoryKind::kRail), mounted + "/seq");
+  } catch (const InputError& e) {
+    error = e.what();
+  }
+  const bool empty = std::filesystem::is_empty(mounted);
+  [[maybe_unused]] const int ignored = std::system(("umount '" + mounted + "'").c_str());
+  EXPECT_EQ(error.rfind(mounted + "/seq/", 0), 0u) << error;
+  EXPECT_EQ(error.find(".partial-"), std::string::npos) << error;
+  EXPECT_NE(error.find(std::strerror(ENOSPC)), std::string::npos) << error;
+  EXPECT_TRUE(empty);
 }
 
 TEST(SyntheticWriter, StampsHaveSixDecimals) {
