@@ -79,6 +79,7 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
   r.preprocess_ms = ms_since(start);
 
   const TrackerParams& tp = params_.tracker;
+  bool can_reference = true;  // the frame becomes the next one's reference (frame to frame)
   if (frames_ == 0) {
     camera_ = frame.camera;
     r.T_wc.pose = initial_pose_;
@@ -86,8 +87,8 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
   } else {
     const bool to_keyframe = tp.mode == TrackingMode::frame_to_keyframe;
     const FramePyramid& reference = to_keyframe ? *keyframe_.pyramid : *previous_;
-    const Eigen::Isometry3d T_w_ref = to_keyframe ? keyframe_.T_wc.pose : previous_pose_;
-    r.reference = to_keyframe ? keyframe_.index : frames_ - 1;
+    const Eigen::Isometry3d T_w_ref = to_keyframe ? keyframe_.T_wc.pose : reference_pose_;
+    r.reference = to_keyframe ? keyframe_.index : reference_index_;
     const Eigen::Isometry3d predicted =
         previous_pose_ * (tp.motion_prior == MotionPrior::constant_velocity
                               ? last_good_motion_
@@ -100,7 +101,7 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
       r.T_wc.pose = T_w_ref * r.icp.pose;
       last_good_motion_ = previous_pose_.inverse() * r.T_wc.pose;
       const Matrix6d Ad = se3_adjoint(T_w_ref);
-      r.pose_covariance = (to_keyframe ? keyframe_.pose_covariance : previous_covariance_) +
+      r.pose_covariance = (to_keyframe ? keyframe_.pose_covariance : reference_covariance_) +
                           Ad * r.icp.covariance * Ad.transpose();
       // As the uncertainty of this frame's step, in the axes of the step's start (the previous
       // frame): against the keyframe the alignment's own axes are the keyframe's.
@@ -127,10 +128,11 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
         r.kept_last_motion && (to_keyframe || r.icp.verdict != IcpVerdict::degenerate);
     const Eigen::Isometry3d T_kf_c = keyframe_.T_wc.pose.inverse() * r.T_wc.pose;
     r.overlap = overlap_with(*pyramid, *keyframe_.pyramid, T_kf_c, params_.icp, pool_.get());
+    can_reference = can_be_reference(*pyramid, params_.icp, pool_.get());
     r.is_keyframe = (T_kf_c.translation().norm() > tp.keyframe_translation ||
                      rotation_angle(T_kf_c.linear()) > tp.keyframe_rotation * kDegToRad ||
                      r.overlap < tp.keyframe_overlap || failed) &&
-                    can_be_reference(*pyramid, params_.icp, pool_.get());
+                    can_reference;
   }
   if (r.is_keyframe) {
     keyframe_.index = r.index;
@@ -140,7 +142,12 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
     keyframe_.pyramid = pyramid;
     keyframe_indices_.push_back(r.index);
   }
-  previous_ = std::move(pyramid);
+  if (can_reference) {
+    previous_ = std::move(pyramid);
+    reference_index_ = r.index;
+    reference_pose_ = r.T_wc.pose;
+    reference_covariance_ = r.pose_covariance;
+  }
   previous_pose_ = r.T_wc.pose;
   previous_covariance_ = r.pose_covariance;
   ++frames_;

@@ -31,7 +31,8 @@ struct Keyframe {
 
 struct TrackResult {
   int index = 0;       // position of the frame in the tracked sequence (0-based)
-  int reference = -1;  // index of the frame it was aligned to; −1 for the first frame
+  int reference = -1;  // index of the frame it was aligned to (frame to frame: the last one with
+                       // points, before a blank one); −1 for the first frame
   StampedPose T_wc;    // camera-to-world estimate
   IcpResult icp;       // the alignment (default-constructed for the first frame)
   /// Covariance of T_wc as the chain of alignments from the first frame (the gauge: zero)
@@ -75,10 +76,16 @@ class KeyframeTracker {
   int frames_ = 0;
   Keyframe keyframe_;
   std::vector<int> keyframe_indices_;
+  // Frame to frame, the last frame that can be aligned against (can_be_reference), with its
+  // pose and pose_covariance: a blank frame (a sensor blackout) does not replace it, so the
+  // frame after it aligns with the one before it.
   std::shared_ptr<const FramePyramid> previous_;
-  Eigen::Isometry3d previous_pose_ = Eigen::Isometry3d::Identity();
+  int reference_index_ = 0;
+  Eigen::Isometry3d reference_pose_ = Eigen::Isometry3d::Identity();
+  Matrix6d reference_covariance_ = Matrix6d::Zero();
+  Eigen::Isometry3d previous_pose_ = Eigen::Isometry3d::Identity();     // the last frame's
   Eigen::Isometry3d last_good_motion_ = Eigen::Isometry3d::Identity();  // T_prev,cur
-  Matrix6d previous_covariance_ = Matrix6d::Zero();  // the previous frame's pose_covariance
+  Matrix6d previous_covariance_ = Matrix6d::Zero();  // the last frame's pose_covariance
   // Of the last good alignment's step, in the axes of its start frame; none before the first.
   std::optional<Matrix6d> last_good_step_covariance_;
 };
