@@ -38,7 +38,7 @@ expect 2 "--support: expected a radius" -- "$eval_bin" curvature --gt "$tmp/seq"
 expect 2 "--support: expected a radius in pixels (0..16384)" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" --support 1073741824
 if /usr/bin/python3 -c 'import numpy' 2>/dev/null; then
   /usr/bin/python3 - "$tmp" <<'PY' || fail=1
-import glob, json, sys, numpy as np
+import glob, json, os, sys, numpy as np
 t = sys.argv[1]
 r = json.load(open(t + "/it.json"))
 assert r["frames"] == 3 and r["estimated_frames"] == 3 and r["gt_frames"] == 3, r
@@ -53,8 +53,11 @@ valid = np.isfinite(k[..., 0])
 assert valid.mean() > 0.9 and np.all(k[valid][:, 0] >= k[valid][:, 1])
 s = json.load(open(t + "/it/summary.json"))
 assert s["method"] == "quad-it" and len(s["frames"]) == 3
+for f in s["frames"]:  # the maps' names and the timestamps as numbers
+    assert os.path.exists(t + "/it/curvature/" + f["stamp"] + ".npy"), f["stamp"]
+    assert abs(f["timestamp"] - float(f["stamp"])) < 1e-6, (f["timestamp"], f["stamp"])
 # The same maps with k1 and k2 swapped, as a peer with another convention might write them.
-import os, shutil
+import shutil
 os.makedirs(t + "/swapped/curvature")
 for f in glob.glob(t + "/it/curvature/*.npy"):
     np.save(t + "/swapped/curvature/" + os.path.basename(f), np.load(f)[..., ::-1].copy())

@@ -33,7 +33,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 struct FrameRecord {
-  std::string stamp;
+  std::string stamp;  // the maps' file name: the timestamp to the microsecond (format_stamp)
+  double timestamp = 0.0;
   QuadricMapSummary summary;
   double milliseconds = 0.0;
 };
@@ -75,6 +76,7 @@ void write_summary(const std::string& path, const std::string& dataset,
       const QuadricMapSummary& s = f.summary;
       json.begin_object()
           .field("stamp", f.stamp)
+          .field("timestamp", f.timestamp)
           .field("valid_fraction", s.pixels ? double(s.valid) / s.pixels : 0.0)
           .field("valid", s.valid)
           .field("no_depth", s.no_centre)
@@ -149,7 +151,7 @@ int run(int argc, char** argv) {
       const Clock::time_point t0 = Clock::now();
       const VertexMap vertices = compute_vertex_map(frame.depth, frame.camera);
       const QuadricMap map = estimator->estimate(vertices);
-      FrameRecord record{format_stamp(frame.timestamp), summarize(map),
+      FrameRecord record{format_stamp(frame.timestamp), frame.timestamp, summarize(map),
                          std::chrono::duration<double, std::milli>(Clock::now() - t0).count()};
       if (record.summary.valid == 0) {
         std::cerr << "jpcr_curvature: warning: frame " << i << " (" << record.stamp
