@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -38,6 +39,32 @@ class TempDir {
 
  private:
   std::filesystem::path path_;
+};
+
+/// A tmpfs of `size` ("64k") mounted at `path` (made here) while it lives: a small disk for the
+/// tests of a full one. mounted() is false where this process may not mount (not root, a
+/// container); the test then skips.
+class SmallDisk {
+ public:
+  SmallDisk(const std::string& path, const std::string& size) : path_(path) {
+    std::filesystem::create_directories(path);
+    mounted_ =
+        ::geteuid() == 0 &&
+        std::system(
+            ("mount -t tmpfs -o size=" + size + " tmpfs '" + path + "' 2>/dev/null").c_str()) == 0;
+  }
+  ~SmallDisk() {
+    if (mounted_) [[maybe_unused]]
+      const int ignored = std::system(("umount '" + path_ + "'").c_str());
+  }
+  SmallDisk(const SmallDisk&) = delete;
+  SmallDisk& operator=(const SmallDisk&) = delete;
+
+  bool mounted() const { return mounted_; }
+
+ private:
+  std::string path_;
+  bool mounted_ = false;
 };
 
 /// Number of regular files directly in `dir`.

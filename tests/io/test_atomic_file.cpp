@@ -1,11 +1,7 @@
 #include <sys/stat.h>
-#include <unistd.h>
 
 #include <cerrno>
-#include <cstdlib>
 #include <cstring>
-#include <filesystem>
-
 #include <fstream>
 #include <sstream>
 
@@ -51,25 +47,17 @@ TEST(AtomicFile, UnwritableDirectoryIsAnInputErrorNamingThePath) {
 // "disk full?" for every failure), and the earlier content and no temporary remain.
 TEST(AtomicFile, AFullDiskIsNamedAndKeepsThePreviousContent) {
   test::TempDir dir;
-  const std::string mounted = dir.file("small");
-  std::filesystem::create_directories(mounted);
-  if (::geteuid() != 0 ||
-      std::system(("mount -t tmpfs -o size=64k tmpfs '" + mounted + "' 2>/dev/null").c_str()) != 0)
-    GTEST_SKIP() << "cannot mount a tmpfs here";
-  const std::string path = mounted + "/out.txt";
-  std::string error;
-  try {
-    write_file_atomically(path, [](std::ostream& out) { out << "old content"; });
-    error = test::input_error_of([&] {
-      write_file_atomically(path, [](std::ostream& out) { out << std::string(1 << 20, 'x'); });
-    });
-    EXPECT_EQ(read_file(path), "old content");
-    EXPECT_EQ(test::count_files(mounted), 1);
-  } catch (const std::exception& e) {
-    ADD_FAILURE() << e.what();
-  }
-  [[maybe_unused]] const int ignored = std::system(("umount '" + mounted + "'").c_str());
-  EXPECT_EQ(error, path + ": write failed (" + std::strerror(ENOSPC) + ")");
+  const test::SmallDisk disk(dir.file("small"), "64k");
+  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here";
+  const std::string path = dir.file("small/out.txt");
+  write_file_atomically(path, [](std::ostream& out) { out << "old content"; });
+  EXPECT_EQ(test::input_error_of([&] {
+              write_file_atomically(path,
+                                    [](std::ostream& out) { out << std::string(1 << 20, 'x'); });
+            }),
+            path + ": write failed (" + std::strerror(ENOSPC) + ")");
+  EXPECT_EQ(read_file(path), "old content");
+  EXPECT_EQ(test::count_files(dir.file("small")), 1);
 }
 
 // A FIFO would block the read forever and /dev/zero never end; both are refused by name.

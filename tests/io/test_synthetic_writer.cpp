@@ -1,10 +1,7 @@
 // The TUM layout written by the generator reads back through the foundation's TUM reader with
 // the exact poses, the depth to PNG quantisation, and the ground-truth maps bit for bit.
-#include <unistd.h>
-
 #include <cerrno>
 #include <cmath>
-#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 
@@ -120,22 +117,18 @@ TEST(SyntheticWriter, RefusesANonEmptyDirectoryUnlessForced) {
 TEST(SyntheticWriter, AFailedWriteNamesTheOutputDirectory) {
   test::TempDir dir;
   const std::string mounted = dir.file("small");
-  std::filesystem::create_directories(mounted);
-  if (::geteuid() != 0 ||
-      std::system(("mount -t tmpfs -o size=64k tmpfs '" + mounted + "' 2>/dev/null").c_str()) != 0)
-    GTEST_SKIP() << "cannot mount a tmpfs here";
+  const test::SmallDisk disk(mounted, "64k");
+  if (!disk.mounted()) GTEST_SKIP() << "cannot mount a tmpfs here";
   std::string error;
   try {
     write_synthetic_sequence(small_sequence("none", TrajectoryKind::kRail), mounted + "/seq");
   } catch (const InputError& e) {
     error = e.what();
   }
-  const bool empty = std::filesystem::is_empty(mounted);
-  [[maybe_unused]] const int ignored = std::system(("umount '" + mounted + "'").c_str());
   EXPECT_EQ(error.rfind(mounted + "/seq/", 0), 0u) << error;
   EXPECT_EQ(error.find(".partial-"), std::string::npos) << error;
   EXPECT_NE(error.find(std::strerror(ENOSPC)), std::string::npos) << error;
-  EXPECT_TRUE(empty);
+  EXPECT_TRUE(std::filesystem::is_empty(mounted));
 }
 
 TEST(SyntheticWriter, StampsHaveSixDecimals) {
