@@ -89,30 +89,37 @@ DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& p, 
   return out;
 }
 
-double filtered_noise_inflation(const FramePyramid& pyramid, int stride) {
+double filtered_noise_inflation(const FramePyramid& pyramid, int stride, int level) {
   const int r = pyramid.filter_radius, n = 2 * r + 1;
-  if (r <= 0 || stride < 1) return 1.0;
+  if (r <= 0 || stride < 1 || level < 0) return 1.0;
   const double s2 = double(pyramid.filter_sigma_space) * pyramid.filter_sigma_space;
-  std::vector<double> w(static_cast<std::size_t>(n) * n);
+  // Level l's pixel is the mean of a b x b block (b = 2^l) of level 0's: its kernel over level
+  // 0's raw samples is the filter's convolved with that block, m = n + b - 1 wide, and its
+  // samples lie stride · b level-0 pixels apart.
+  const int b = 1 << level, m = n + b - 1, step = stride * b;
+  std::vector<double> w(static_cast<std::size_t>(m) * m, 0.0);
   for (int dv = -r; dv <= r; ++dv)
-    for (int du = -r; du <= r; ++du)
-      w[static_cast<std::size_t>((dv + r) * n + du + r)] =
-          std::exp(-(du * du + dv * dv) / (2 * s2));
-  // A(k) = Σ_x w(x) w(x + k) over the kernel's support; the lattice offsets within ±2r.
+    for (int du = -r; du <= r; ++du) {
+      const double g = std::exp(-(du * du + dv * dv) / (2 * s2));
+      for (int bv = 0; bv < b; ++bv)
+        for (int bu = 0; bu < b; ++bu)
+          w[static_cast<std::size_t>((dv + r + bv) * m + du + r + bu)] += g;
+    }
+  // A(k) = Σ_x w(x) w(x + k) over the kernel's support; the lattice offsets within ±(m − 1).
   const auto autocorrelation = [&](int ku, int kv) {
     double a = 0.0;
-    for (int v = 0; v < n; ++v)
-      for (int u = 0; u < n; ++u) {
+    for (int v = 0; v < m; ++v)
+      for (int u = 0; u < m; ++u) {
         const int u2 = u + ku, v2 = v + kv;
-        if (u2 >= 0 && u2 < n && v2 >= 0 && v2 < n)
-          a += w[static_cast<std::size_t>(v * n + u)] * w[static_cast<std::size_t>(v2 * n + u2)];
+        if (u2 >= 0 && u2 < m && v2 >= 0 && v2 < m)
+          a += w[static_cast<std::size_t>(v * m + u)] * w[static_cast<std::size_t>(v2 * m + u2)];
       }
     return a;
   };
-  const int reach = (2 * r / stride) * stride;
+  const int reach = ((m - 1) / step) * step;
   double sum = 0.0;
-  for (int kv = -reach; kv <= reach; kv += stride)
-    for (int ku = -reach; ku <= reach; ku += stride)
+  for (int kv = -reach; kv <= reach; kv += step)
+    for (int ku = -reach; ku <= reach; ku += step)
       sum += autocorrelation(ku, kv);
   return sum / autocorrelation(0, 0);
 }

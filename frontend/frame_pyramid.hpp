@@ -38,8 +38,9 @@ struct FramePyramid {
 /// variance of a least-squares estimate grows by Σ_k ρ(k) over the lattice offsets k ∈ stride·Z²
 /// (ρ: the normalised autocorrelation of the filter's spatial kernel), so σ²(JᵀWJ)⁻¹ from the
 /// filtered residuals understates it by that factor. The range weights only narrow the kernel:
-/// this is an upper bound. 1 without a filter.
-double filtered_noise_inflation(const FramePyramid& pyramid, int stride);
+/// this is an upper bound. 1 without a filter. At pyramid `level` l every pixel is the mean of a
+/// 2^l x 2^l block of level 0's, and the lattice is stride · 2^l level-0 pixels.
+double filtered_noise_inflation(const FramePyramid& pyramid, int stride, int level = 0);
 
 /// The normal map that serves `level`: its own, or when it has none the next coarser level's,
 /// read at (u >> shift, v >> shift). The coarser level has ⌊w/2⌋ x ⌊h/2⌋ pixels, so the last

@@ -296,7 +296,7 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
 
   Eigen::Isometry3d T = initial;
   NormalEquations last;
-  int last_stride = 1;
+  int last_stride = 1, last_level = 0;
   bool have_system = false;
   Vector6d last_step = Vector6d::Zero();
   // The smallest degeneracy of the levels' last linearisations: a coarse level's normals are
@@ -316,6 +316,7 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
           linearize_point_to_plane(source, target, l, T, params, stride, pool);
       last = eq;
       last_stride = stride;
+      last_level = l;
       have_system = true;
       if (static_cast<double>(eq.inliers) < needed) {
         describe(eq, params.max_normal_angle, result);
@@ -353,8 +354,8 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
     // Filtered depth: the residuals' errors are shared between neighbouring pixels (both
     // frames' noise enters each residual; each frame's filter counts for its half).
     if (last.inliers > 0)
-      result.covariance *= 0.5 * (filtered_noise_inflation(source, last_stride) +
-                                  filtered_noise_inflation(target, last_stride));
+      result.covariance *= 0.5 * (filtered_noise_inflation(source, last_stride, last_level) +
+                                  filtered_noise_inflation(target, last_stride, last_level));
     // Statistically converged: the last step moved the pose by less than one standard deviation
     // of the estimate (ξᵀ Σ⁻¹ ξ ≤ 1), so further iterations would not change it beyond its
     // noise. On fr1/xyz the default schedule's last step measured 0.5 σ (median), 1.2 σ at the
