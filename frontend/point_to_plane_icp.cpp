@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
-#include <limits>
 #include <string>
 #include <vector>
 
@@ -45,9 +44,20 @@ double normal_noise(double kept_mean, double max_angle_deg) {
   return 0.5 * (lo + hi);
 }
 
+// A linearisation's degeneracy and the normals' noise σ² per tangent axis it was corrected for.
+struct Observability {
+  double degeneracy = 0.0;
+  double normal_noise = 0.0;
+};
+
+// Up to this σ² per tangent axis (about 14°) the second-order correction below holds: measured,
+// a plane at 320x240 under 1 % range noise (σ² 0.045) reads 0; at 640x480 (σ² 0.09–0.10 on the
+// two finer levels) it read 0.008–0.015, as observed as a room.
+constexpr double kCorrectableNormalNoise = 0.06;
+
 // λmin / λmax of one linearisation's JᵀWJ, unit-free and without the normals' noise
 // (max_normal_angle: the pairs' normal-angle test, deg); 0 without pairs.
-double noise_corrected_degeneracy(const NormalEquations& eq, double max_normal_angle) {
+Observability noise_corrected_degeneracy(const NormalEquations& eq, double max_normal_angle) {
   const Matrix6d H = eq.hessian();
   // The degeneracy sees the geometry, not the normals' noise. J = B n with B = [I; [p]×]; with
   // n = (n̄ + δ) / |n̄ + δ|, δ tangent of variance σ² per axis, E[n nᵀ] = (1 − 3σ²) n̄ n̄ᵀ + σ² I
@@ -82,9 +92,9 @@ double noise_corrected_degeneracy(const NormalEquations& eq, double max_normal_a
     const Eigen::SelfAdjointEigenSolver<Matrix6d> scaled(d.asDiagonal() * G * d.asDiagonal(),
                                                          Eigen::EigenvaluesOnly);
     const Vector6d l = scaled.eigenvalues();
-    return l[5] > 0.0 ? std::max(l[0], 0.0) / l[5] : 0.0;
+    return {l[5] > 0.0 ? std::max(l[0], 0.0) / l[5] : 0.0, s2};
   }
-  return 0.0;
+  return {0.0, s2};
 }
 
 // Final statistics of an alignment from its last normal equations (max_normal_angle: the pairs'
@@ -95,7 +105,7 @@ void describe(const NormalEquations& eq, double max_normal_angle, IcpResult& r) 
   r.rms = eq.inliers > 0 ? std::sqrt(eq.sum_squares / eq.inliers) : 0.0;
   const Eigen::SelfAdjointEigenSolver<Matrix6d> eig(eq.hessian());
   r.eigenvalues = eig.eigenvalues();
-  r.degeneracy = noise_corrected_degeneracy(eq, max_normal_angle);
+  r.degeneracy = noise_corrected_degeneracy(eq, max_normal_angle).degeneracy;
   const double lmax = std::max(r.eigenvalues[5], 1e-300);
   const Vector6d inv = r.eigenvalues.cwiseMax(1e-12 * lmax).cwiseInverse();
   // σ² of a unit-weight residual: Σ w e² over the residuals' degrees of freedom. Not Σ w − 6:
@@ -299,11 +309,13 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
   int last_stride = 1, last_level = 0;
   bool have_system = false;
   Vector6d last_step = Vector6d::Zero();
-  // The smallest degeneracy of the levels' last linearisations: a coarse level's normals are
-  // far less noisy (block-averaged depth, a longer metric baseline), and its geometry is the
-  // scene's; at 640x480 under 1 % range noise the finest level's correction leaves a plane
-  // or a wall and a floor reading as well observed as a room (IcpResult::degeneracy).
-  double coarse_degeneracy = std::numeric_limits<double>::infinity();
+  // Each level's observability at its last linearisation, coarsest first. The verdict takes the
+  // finest level whose normals are within what the noise correction holds for: at 640x480
+  // under 1 % range noise the finest levels' normals are beyond it and a plane read as well
+  // observed as a room, while a coarse level (block-averaged depth, a longer baseline in the
+  // scene) sees it as one; but a coarse level also loses small structure (2 cm bumps on a wall
+  // at 320x240), so it is not asked when the fine one can answer.
+  std::vector<Observability> observed;
   for (int l = coarsest; l >= 0; --l) {
     const int iterations = params.iterations[l];
     if (iterations <= 0) continue;
@@ -344,13 +356,15 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
         break;
       }
     }
-    if (l > 0)
-      coarse_degeneracy =
-          std::min(coarse_degeneracy, noise_corrected_degeneracy(last, params.max_normal_angle));
+    observed.push_back(noise_corrected_degeneracy(last, params.max_normal_angle));
   }
   if (have_system) {
     describe(last, params.max_normal_angle, result);
-    result.degeneracy = std::min(result.degeneracy, coarse_degeneracy);
+    const auto usable = std::find_if(
+        observed.rbegin(), observed.rend(),
+        [](const Observability& o) { return o.normal_noise <= kCorrectableNormalNoise; });
+    result.degeneracy =
+        usable != observed.rend() ? usable->degeneracy : observed.front().degeneracy;
     // Filtered depth: the residuals' errors are shared between neighbouring pixels (both
     // frames' noise enters each residual; each frame's filter counts for its half).
     if (last.inliers > 0)

@@ -44,8 +44,8 @@ struct IcpResult {
   Vector6d eigenvalues = Vector6d::Zero();
   /// λmin / λmax of JᵀWJ made unit-free: the ω columns are divided by the RMS lever arm
   /// √(Σ w |p × n|² / Σ w). 1 is perfectly conditioned, 0 unobservable. Noise in the normals
-  /// adds information in unobservable directions; its expected part is taken out, and this is
-  /// the smallest value over the pyramid levels that ran (the coarse levels' normals are less
+  /// adds information in unobservable directions; its expected part is taken out, at the finest
+  /// pyramid level whose normals are not too noisy for that (the coarse levels' are less
   /// noisy). README, "A single plane seen with noisy normals is degenerate too".
   double degeneracy = 0.0;
   /// σ² (JᵀWJ)⁻¹ for ξ in the target frame (left perturbation), σ² = Σ w e² / (n − 6) over the n
