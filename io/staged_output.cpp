@@ -139,6 +139,38 @@ std::string StagedOutput::path(const std::string& name) const {
 // aside into the staging directory, then the staged ones move in. When a rename fails (an
 // immutable or foreign-owned entry, a full directory), the entries moved so far go back, so the
 // target holds the earlier run's outputs, untouched, and the error names the entry.
+// After a failed commit: the staged outputs (not .previous) into NAME.unsaved-PID beside the
+// staging directory (-2, -3, ... when taken); keep_staging_ where some could not move.
+std::string StagedOutput::keep_outputs() {
+  std::error_code ec;
+  fs::path t = fs::path(target_).lexically_normal();
+  if (t.filename().empty()) t = t.parent_path();  // "out/" → "out"
+  const std::string stem = (t.filename().empty() ? std::string("output") : t.filename().string()) +
+                           ".unsaved-" + std::to_string(::getpid());
+  const fs::path staged(staging_);
+  fs::path kept;
+  for (int k = 1; k <= 100 && kept.empty(); ++k) {
+    const fs::path candidate =
+        staged.parent_path() / (k == 1 ? stem : stem + "-" + std::to_string(k));
+    if (fs::create_directory(candidate, ec)) kept = candidate;
+    if (ec) break;  // not a name taken: this directory cannot hold it
+  }
+  bool all_moved = !kept.empty();
+  std::vector<fs::path> entries;
+  for (const fs::directory_entry& e : fs::directory_iterator(staged, ec))
+    if (e.path().filename() != kPrevious) entries.push_back(e.path().filename());
+  for (const fs::path& entry : entries) {
+    if (kept.empty()) break;
+    std::error_code moved;
+    fs::rename(staged / entry, kept / entry, moved);
+    all_moved = all_moved && !moved;
+  }
+  if (all_moved) return "; this run's outputs are kept in " + kept.string();
+  keep_staging_ = true;
+  return "; this run's outputs are in " + staging_ + (kept.empty() ? "" : " and " + kept.string()) +
+         ", which the next run into " + target_ + " removes: move them elsewhere first";
+}
+
 void StagedOutput::commit() {
   ensure_directory(target_);
   std::vector<std::string> names = layout_;
@@ -162,19 +194,15 @@ void StagedOutput::commit() {
       fs::rename(previous / name, fs::path(target_) / name, ec);
       all_back = all_back && !ec;
     }
-    if (all_back) fs::remove(previous, ec);
-    // Visible, and out of the reach of the next run's sweep of abandoned staging directories.
-    keep_staging_ = true;
-    const fs::path staged(staging_);
-    const std::string name = fs::path(target_).lexically_normal().filename().string();
-    const fs::path kept = staged.parent_path() / ((name.empty() ? "output" : name) + ".unsaved-" +
-                                                  std::to_string(::getpid()));
-    fs::rename(staged, kept, ec);
-    if (!ec) staging_ = kept.string();
-    const std::string outputs = "; this run's outputs are kept in " + staging_;
+    // This run's outputs move to a visible directory of their own beside the staging directory
+    // (beside the target, or inside it where the run was staged there), out of the reach of
+    // the next run's sweep of abandoned staging directories; earlier entries that could not be
+    // put back stay in the staging directory's .previous, which that sweep restores.
+    const std::string outputs = keep_outputs();
+    keep_staging_ = keep_staging_ || !all_back;
     if (all_back) return "; the earlier outputs in " + target_ + " are kept as they were" + outputs;
-    return "; some earlier outputs could not be put back and are kept in " +
-           (fs::path(staging_) / kPrevious).string() + outputs;
+    return "; some earlier outputs could not be put back and are kept in " + previous.string() +
+           " (the next run into " + target_ + " puts them back)" + outputs;
   };
   std::error_code ec;
   for (const std::string& name : names) {

@@ -66,11 +66,15 @@ class StagedOutput {
 
   /// Moves the staged entries into the target (same file system: renames), all or nothing:
   /// when an entry cannot be replaced, the ones already moved go back and the target is left as
-  /// it was, and this run's outputs are kept beside it in `NAME.unsaved-PID` (directory() then
-  /// names it). Throws InputError naming that entry and where the outputs are.
+  /// it was, and this run's outputs are kept in `NAME.unsaved-PID` beside the staging
+  /// directory (beside the target, or inside it where the run was staged there; -2, -3, ...
+  /// when the name is taken), which no later run removes. Throws InputError naming that entry
+  /// and where the outputs are.
   void commit();
 
  private:
+  std::string keep_outputs();
+
   std::string target_, staging_;
   std::vector<std::string> layout_;
   std::vector<std::string> created_;  // the target's missing ancestors, made here, deepest last
