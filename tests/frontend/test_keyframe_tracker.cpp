@@ -147,6 +147,24 @@ TEST(KeyframeTracker, AFailedFrameKeepsTheLastGoodMotion) {
   EXPECT_FALSE(results[2].is_keyframe);  // 20 mm along the rail: not by distance
 }
 
+// Frame to frame, a failed alignment of a frame that has points starts a keyframe, so that the
+// back end refines the extrapolated motion: frame 3 sees a wall 1 m ahead instead of the rail's
+// scene (a person stepping in front of the camera), nothing pairs with frame 2 within the gate.
+TEST(KeyframeTracker, AFailedAlignmentOfAFrameWithPointsStartsAKeyframe) {
+  const SyntheticSequence seq = rail(5);
+  KeyframeTracker tracker(FrontendParams{}, seq.ground_truth(0).value());
+  std::vector<TrackResult> results;
+  for (std::size_t i = 0; i < 5; ++i) {
+    Frame f = seq.load(i);
+    if (i == 3) f.depth = DepthImage(f.depth.width(), f.depth.height(), 1.0f);
+    results.push_back(tracker.track(f));
+  }
+  EXPECT_NE(results[3].icp.verdict, IcpVerdict::ok) << to_string(results[3].icp.verdict);
+  EXPECT_TRUE(results[3].kept_last_motion);
+  EXPECT_TRUE(results[3].is_keyframe);
+  EXPECT_FALSE(results[2].is_keyframe);  // 20 mm along the rail: not by distance
+}
+
 // Frame to frame, a degenerate alignment (a featureless corridor) keeps the last motion but
 // starts no keyframe, or every frame of such a view would be one; J-ftf could not observe the
 // motion either.
