@@ -140,6 +140,7 @@ int run(int argc, char** argv) {
     const Eigen::Isometry3d start = source->ground_truth(0).value_or(Eigen::Isometry3d::Identity());
     KeyframeTracker tracker(params, start);
     const int jpcr_threads = tracker.threads();
+    cv::setNumThreads(jpcr_threads);  // the same number of threads for both
     std::cerr << "bench_icp_peers: " << source->description() << ", using " << frames
               << " frames; jpcr threads " << jpcr_threads << ", OpenCV threads "
               << cv::getNumThreads() << '\n';
