@@ -112,15 +112,21 @@ TEST(KeyframeTracker, OverlapIsTheSharedViewNotTheDepthNoise) {
   }
 }
 
-TEST(KeyframeTracker, AFailedFrameKeepsTheLastGoodMotion) {
-  const SyntheticSequence seq = rail(5);
+// Tracks the 5 frames of `seq` (the rail) with frame 3's depth all `depth_3` (m).
+std::vector<TrackResult> track_with_frame_3_at(const SyntheticSequence& seq, float depth_3) {
   KeyframeTracker tracker(FrontendParams{}, seq.ground_truth(0).value());
   std::vector<TrackResult> results;
   for (std::size_t i = 0; i < 5; ++i) {
     Frame f = seq.load(i);
-    if (i == 3) f.depth = DepthImage(f.depth.width(), f.depth.height(), 0.0f);  // sensor blackout
+    if (i == 3) f.depth = DepthImage(f.depth.width(), f.depth.height(), depth_3);
     results.push_back(tracker.track(f));
   }
+  return results;
+}
+
+TEST(KeyframeTracker, AFailedFrameKeepsTheLastGoodMotion) {
+  const SyntheticSequence seq = rail(5);
+  const std::vector<TrackResult> results = track_with_frame_3_at(seq, 0.0f);  // a blackout
   EXPECT_EQ(results[3].icp.verdict, IcpVerdict::too_few_points);
   EXPECT_TRUE(results[3].kept_last_motion);
   // Constant velocity through the gap: 10 mm further along the rail.
@@ -151,14 +157,7 @@ TEST(KeyframeTracker, AFailedFrameKeepsTheLastGoodMotion) {
 // back end refines the extrapolated motion: frame 3 sees a wall 1 m ahead instead of the rail's
 // scene (a person stepping in front of the camera), nothing pairs with frame 2 within the gate.
 TEST(KeyframeTracker, AFailedAlignmentOfAFrameWithPointsStartsAKeyframe) {
-  const SyntheticSequence seq = rail(5);
-  KeyframeTracker tracker(FrontendParams{}, seq.ground_truth(0).value());
-  std::vector<TrackResult> results;
-  for (std::size_t i = 0; i < 5; ++i) {
-    Frame f = seq.load(i);
-    if (i == 3) f.depth = DepthImage(f.depth.width(), f.depth.height(), 1.0f);
-    results.push_back(tracker.track(f));
-  }
+  const std::vector<TrackResult> results = track_with_frame_3_at(rail(5), 1.0f);
   EXPECT_NE(results[3].icp.verdict, IcpVerdict::ok) << to_string(results[3].icp.verdict);
   EXPECT_TRUE(results[3].kept_last_motion);
   EXPECT_TRUE(results[3].is_keyframe);
