@@ -135,10 +135,6 @@ std::string StagedOutput::path(const std::string& name) const {
   return (fs::path(staging_) / name).string();
 }
 
-// All or nothing, by renames on one file system: the target's entries of the layout first move
-// aside into the staging directory, then the staged ones move in. When a rename fails (an
-// immutable or foreign-owned entry, a full directory), the entries moved so far go back, so the
-// target holds the earlier run's outputs, untouched, and the error names the entry.
 // After a failed commit: the staged outputs (not .previous) into NAME.unsaved-PID beside the
 // staging directory (-2, -3, ... when taken); keep_staging_ where some could not move.
 std::string StagedOutput::keep_outputs() {
@@ -171,6 +167,10 @@ std::string StagedOutput::keep_outputs() {
          ", which the next run into " + target_ + " removes: move them elsewhere first";
 }
 
+// All or nothing, by renames on one file system: the target's entries of the layout first move
+// aside into the staging directory, then the staged ones move in. When a rename fails (an
+// immutable or foreign-owned entry, a full directory), the entries moved so far go back, so the
+// target holds the earlier run's outputs, untouched, and the error names the entry.
 void StagedOutput::commit() {
   ensure_directory(target_);
   std::vector<std::string> names = layout_;
@@ -181,8 +181,9 @@ void StagedOutput::commit() {
   ensure_directory(previous.string());
   std::vector<std::string> moved_aside, moved_in;
   // Puts the moved-aside entries back; the ones that cannot go back stay in `previous`. This
-  // run's outputs go back into the staging directory, which is kept (not removed when the run
-  // fails) and named in the error: a run of hours is not lost to a target it cannot replace.
+  // run's outputs go back into the staging directory and from there into a directory of their
+  // own (keep_outputs), named in the error: a run of hours is not lost to a target it cannot
+  // replace.
   const auto roll_back = [&]() -> std::string {
     std::error_code ec;
     for (const std::string& name : moved_in) {
