@@ -1,5 +1,6 @@
 #include "jpcr/io/atomic_file.hpp"
 
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -8,20 +9,69 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <mutex>
+#include <set>
 #include <sstream>
 
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
 
+namespace fs = std::filesystem;
+
 namespace {
 
+const std::string kTemporaryTag = ".jpcr-tmp.";
+
+// `.NAME.jpcr-tmp.PID.N` beside `path`: hidden, and named so that the sweep below cannot take a
+// file of the user's for one.
 std::string temporary_name(const std::string& path) {
   static std::atomic<unsigned> counter{0};
-  return path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
+  const fs::path p(path);
+  return (p.parent_path() / ("." + p.filename().string() + kTemporaryTag +
+                             std::to_string(::getpid()) + "." + std::to_string(counter++)))
+      .string();
+}
+
+// The PID in a temporary's name, or 0 when `name` is not one.
+long temporary_owner(const std::string& name) {
+  const std::size_t tag = name.rfind(kTemporaryTag);
+  if (name.empty() || name[0] != '.' || tag == std::string::npos || tag < 2) return 0;
+  const std::string rest = name.substr(tag + kTemporaryTag.size());  // PID.N
+  const std::size_t dot = rest.find('.');
+  const auto digits = [](const std::string& d) {
+    return !d.empty() && d.size() <= 9 && d.find_first_not_of("0123456789") == std::string::npos;
+  };
+  if (dot == std::string::npos || !digits(rest.substr(0, dot)) || !digits(rest.substr(dot + 1)))
+    return 0;
+  return std::stol(rest.substr(0, dot));
+}
+
+// Once per directory and process: the temporaries there of processes killed before they could
+// remove them. Best effort; a directory that cannot be read is left as it is.
+void remove_abandoned_temporaries(const fs::path& directory) {
+  static std::mutex mutex;
+  static std::set<std::string> swept;
+  {
+    const std::lock_guard<std::mutex> lock(mutex);
+    if (!swept.insert(directory.string()).second) return;
+  }
+  std::error_code ec;
+  for (const fs::directory_entry& e :
+       fs::directory_iterator(directory.empty() ? fs::path(".") : directory, ec)) {
+    const long pid = temporary_owner(e.path().filename().string());
+    std::error_code ignored;
+    if (pid > 0 && process_is_gone(pid) && e.is_regular_file(ignored))
+      fs::remove(e.path(), ignored);
+  }
 }
 
 }  // namespace
+
+bool process_is_gone(long pid) {
+  if (pid <= 0 || pid == ::getpid()) return false;
+  return ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+}
 
 void write_file_atomically(const std::string& path,
                            const std::function<void(std::ostream&)>& write) {
@@ -48,27 +98,28 @@ void write_file_atomically(const std::string& path,
     std::remove(tmp.c_str());
     throw;
   }
+  remove_abandoned_temporaries(fs::path(path).parent_path());
 }
 
 void ensure_directory(const std::string& dir) {
   std::error_code ec;
-  std::filesystem::create_directories(dir, ec);
-  if (ec || !std::filesystem::is_directory(dir)) {
+  fs::create_directories(dir, ec);
+  if (ec || !fs::is_directory(dir)) {
     throw InputError(dir + ": cannot create directory (" + ec.message() + ")");
   }
 }
 
 void ensure_parent_directory(const std::string& file) {
-  const std::string parent = std::filesystem::path(file).parent_path().string();
+  const std::string parent = fs::path(file).parent_path().string();
   if (!parent.empty()) ensure_directory(parent);
 }
 
 std::string read_file(const std::string& path) {
   std::error_code ec;
-  if (!std::filesystem::exists(path, ec)) throw InputError(path + ": file does not exist");
-  if (std::filesystem::is_directory(path, ec)) throw InputError(path + ": is a directory");
+  if (!fs::exists(path, ec)) throw InputError(path + ": file does not exist");
+  if (fs::is_directory(path, ec)) throw InputError(path + ": is a directory");
   // A FIFO would block and a device (/dev/zero) never end: only regular files are read.
-  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": not a regular file");
+  if (!fs::is_regular_file(path, ec)) throw InputError(path + ": not a regular file");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path + ": cannot be opened (" + std::strerror(errno) + ")");
   std::ostringstream ss;

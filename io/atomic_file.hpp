@@ -1,5 +1,7 @@
 // Outputs are written whole or not at all: the content goes to a temporary file in the same
-// directory, which is renamed over the target only after it was written and flushed.
+// directory, which is renamed over the target only after it was written and flushed. The
+// temporary is hidden, `.NAME.jpcr-tmp.PID.N`; one left by a process that was killed outright
+// (SIGKILL) is removed by the next write into that directory once the PID no longer exists.
 #pragma once
 
 #include <functional>
@@ -10,9 +12,16 @@ namespace jpcr {
 
 /// Calls write(stream) on a temporary file next to `path`, then renames it to `path`. If write
 /// throws or the stream fails, the temporary file is removed and `path` is left untouched.
-/// Throws InputError naming the file when it cannot be written.
+/// Throws InputError naming the file when it cannot be written. The first call for a directory
+/// in a process removes the temporaries there of processes that no longer exist.
 void write_file_atomically(const std::string& path,
                            const std::function<void(std::ostream&)>& write);
+
+/// Whether `pid` names no process (kill(pid, 0) fails with ESRCH): what a process of that PID
+/// left behind is abandoned. A live PID, this process's and one this process may not signal are
+/// not gone. PIDs are this host's: a file system shared with another host running the same
+/// program can see its live PIDs as gone.
+bool process_is_gone(long pid);
 
 /// Creates `dir` and its parents when missing; throws InputError naming it on failure.
 void ensure_directory(const std::string& dir);

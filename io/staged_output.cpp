@@ -1,6 +1,5 @@
 #include "jpcr/io/staged_output.hpp"
 
-#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -37,8 +36,7 @@ void remove_abandoned_staging(const fs::path& parent, const std::string& prefix,
     const std::string digits = name.substr(prefix.size());
     if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
     const long pid = std::stol(digits);
-    if (pid <= 0 || pid == ::getpid() || ::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH)
-      continue;
+    if (!process_is_gone(pid)) continue;
     std::error_code ignored;
     for (const fs::directory_entry& aside : fs::directory_iterator(e.path() / kPrevious, ignored))
       if (!fs::exists(fs::symlink_status(target / aside.path().filename(), ignored)))

@@ -1,9 +1,13 @@
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -58,6 +62,43 @@ TEST(AtomicFile, AFullDiskIsNamedAndKeepsThePreviousContent) {
             path + ": write failed (" + std::strerror(ENOSPC) + ")");
   EXPECT_EQ(read_file(path), "old content");
   EXPECT_EQ(test::count_files(dir.file("small")), 1);
+}
+
+// A PID that no longer exists: a child's that has exited and been reaped.
+long gone_pid() {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return child;
+}
+
+// A writer killed outright leaves its hidden temporary; the next write into that directory
+// removes it, and only it: not a live process's (PID 1, this one's), not a file that merely
+// looks alike.
+TEST(AtomicFile, TheTemporaryOfAKilledWriterIsRemovedByTheNextWrite) {
+  test::TempDir dir;
+  const long gone = gone_pid();
+  ASSERT_TRUE(process_is_gone(gone));
+  const std::string abandoned = ".a.txt.jpcr-tmp." + std::to_string(gone) + ".0";
+  const std::vector<std::string> kept = {
+      ".a.txt.jpcr-tmp.1.0",                                   // a live process
+      ".a.txt.jpcr-tmp." + std::to_string(::getpid()) + ".7",  // this one (another thread)
+      "a.txt.jpcr-tmp." + std::to_string(gone) + ".0",         // not hidden
+      ".a.txt.jpcr-tmp." + std::to_string(gone),               // no counter
+      ".a.txt.tmp." + std::to_string(gone) + ".0"};            // another tag
+  dir.write(abandoned, "half");
+  for (const std::string& name : kept)
+    dir.write(name, "x");
+  write_file_atomically(dir.file("b.txt"), [](std::ostream& out) { out << "new"; });
+  EXPECT_FALSE(std::filesystem::exists(dir.file(abandoned)));
+  for (const std::string& name : kept)
+    EXPECT_TRUE(std::filesystem::exists(dir.file(name))) << name;
+  EXPECT_EQ(read_file(dir.file("b.txt")), "new");
+  EXPECT_EQ(test::count_files(dir.path()), static_cast<int>(kept.size()) + 1);
+  EXPECT_FALSE(process_is_gone(1));
+  EXPECT_FALSE(process_is_gone(::getpid()));
+  EXPECT_FALSE(process_is_gone(0));
 }
 
 // A FIFO would block the read forever and /dev/zero never end; both are refused by name.
