@@ -39,6 +39,7 @@ RefinementResult refine_or_report(const Refiner& refiner, const std::vector<Fram
     r.report.method = refiner.name();
     r.report.verdict = RefinementVerdict::kError;
     r.report.error = e.what();
+    r.report.device.clear();  // unknown: a GPU refiner's non-device error reaches here too
     return r;
   }
 }

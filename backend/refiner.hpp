@@ -45,7 +45,10 @@ bool usable(RefinementVerdict verdict);
 
 /// Whether a result can be trusted (architecture.md: every result says so).
 struct RefinementReport {
-  std::string method;  // "j-ftf", "j-full", "q-full" or "icp-bundle"
+  std::string method;          // "j-ftf", "j-full", "q-full" or "icp-bundle"
+  std::string device = "cpu";  // where it ran: "cpu", or "cuda" (the GPU J-ftf; a refinement
+                               // that fell back to the CPU after a GPU failure says "cpu");
+                               // empty where the refiner threw (kError)
   RefinementVerdict verdict = RefinementVerdict::kDiverged;
   std::string error;               // kError: what the refiner threw; empty otherwise
   int iterations = 0;              // accepted steps

@@ -39,6 +39,7 @@ class CpuFallback {
         record(e);
       }
     }
+    ++cpu_calls_;
     return cpu();
   }
 
@@ -46,6 +47,8 @@ class CpuFallback {
   bool on_cpu() const { return on_cpu_; }
   /// Calls that ran on the CPU because the device was out of memory.
   int out_of_memory_calls() const { return out_of_memory_calls_; }
+  /// Calls that ran on the CPU, for any reason.
+  int cpu_calls() const { return cpu_calls_; }
 
  private:
   void record(const CudaError& e) const;
@@ -54,7 +57,7 @@ class CpuFallback {
   std::ostream& log_;
   mutable std::mutex mutex_;  // the log and the decision to switch
   mutable std::atomic<bool> on_cpu_{false};
-  mutable std::atomic<int> out_of_memory_in_a_row_{0}, out_of_memory_calls_{0};
+  mutable std::atomic<int> out_of_memory_in_a_row_{0}, out_of_memory_calls_{0}, cpu_calls_{0};
 };
 
 }  // namespace jpcr

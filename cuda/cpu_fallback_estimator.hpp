@@ -25,6 +25,9 @@ class CpuFallbackEstimator final : public CurvatureEstimator {
   bool on_cpu() const { return fallback_.on_cpu(); }
   /// Frames that ran on the CPU because the device was out of memory.
   int out_of_memory_calls() const { return fallback_.out_of_memory_calls(); }
+  /// Frames that ran on the CPU, for any reason, and the name of what ran them.
+  int cpu_calls() const { return fallback_.cpu_calls(); }
+  std::string cpu_name() const { return cpu_->name(); }
 
  private:
   std::unique_ptr<CurvatureEstimator> gpu_, cpu_;

@@ -378,6 +378,7 @@ TEST(PipelineHistory, ARefinerThatThrowsIsAFailedRefinementAndTheRunGoesOn) {
   ASSERT_TRUE(failed.pair.has_value());
   EXPECT_EQ(failed.pair->verdict, RefinementVerdict::kError);
   EXPECT_EQ(failed.pair->method, "j-ftf");
+  EXPECT_EQ(failed.pair->device, "");  // where it failed is not known
   EXPECT_NE(failed.pair->error.find("device lost"), std::string::npos) << failed.pair->error;
   EXPECT_TRUE(failed.used_front_end);
   EXPECT_FALSE(back_end.verdicts(2).trusted());

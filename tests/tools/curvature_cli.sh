@@ -52,7 +52,8 @@ assert k.shape == (120, 160, 2) and k.dtype == np.float32, (k.shape, k.dtype)
 valid = np.isfinite(k[..., 0])
 assert valid.mean() > 0.9 and np.all(k[valid][:, 0] >= k[valid][:, 1])
 s = json.load(open(t + "/it/summary.json"))
-assert s["method"] == "quad-it" and len(s["frames"]) == 3
+assert s["method"] == "quad-it" and len(s["frames"]) == 3 and s["cpu_fallback_frames"] == 0, s
+assert all(f["method"] == "quad-it" for f in s["frames"]), s  # what made each map
 for f in s["frames"]:  # the maps' names and the timestamps as numbers
     assert os.path.exists(t + "/it/curvature/" + f["stamp"] + ".npy"), f["stamp"]
     assert abs(f["timestamp"] - float(f["stamp"])) < 1e-6, (f["timestamp"], f["stamp"])

@@ -27,6 +27,7 @@ r = json.load(open(sys.argv[1] + "/ftf/report.json"))
 assert r["method"] == "j-ftf" and r["frames"] == 4 and r["keyframes"] == 4, r
 pairs = [k["pair"] for k in r["keyframe_records"][1:]]
 assert all(p is not None and p["verdict"] == "converged" for p in pairs), pairs
+assert len({p["device"] for p in pairs}) == 1 and pairs[0]["device"] in ("cpu", "cuda"), pairs
 # Each pair's predicted spread: one pose, one step, the same (J-ftf), positive.
 for p in pairs:
     assert len(p["translation_sd_m"]) == 1 and p["step_translation_sd_m"] == p["translation_sd_m"], p

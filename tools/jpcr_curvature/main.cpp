@@ -12,6 +12,7 @@
 #include "cli/device_option.hpp"
 #include "cli/progress.hpp"
 #include "cli/stop_signal.hpp"
+#include "jpcr/cuda/cpu_fallback_estimator.hpp"
 #include "jpcr/cuda/curvature_estimator_factory.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/camera_yaml.hpp"
@@ -37,7 +38,19 @@ struct FrameRecord {
   double timestamp = 0.0;
   QuadricMapSummary summary;
   double milliseconds = 0.0;
+  std::string method;  // the estimator that made the map: the CPU's after a GPU failure
 };
+
+// Estimates a frame's map, and says with which estimator: a GPU Quad IT whose device failed
+// (CpuFallbackEstimator) made it with the CPU one.
+QuadricMap estimate(const CurvatureEstimator& estimator, const VertexMap& vertices,
+                    std::string& method) {
+  const auto* fallback = dynamic_cast<const CpuFallbackEstimator*>(&estimator);
+  const int cpu_calls = fallback ? fallback->cpu_calls() : 0;
+  QuadricMap map = estimator.estimate(vertices);
+  method = fallback && fallback->cpu_calls() > cpu_calls ? fallback->cpu_name() : estimator.name();
+  return map;
+}
 
 #ifdef JPCR_HAVE_CGAL
 constexpr const char* kMethodHelp =
@@ -70,7 +83,13 @@ void write_summary(const std::string& path, const std::string& dataset,
                    const CurvatureEstimator& estimator, const std::vector<FrameRecord>& frames) {
   write_file_atomically(path, [&](std::ostream& out) {
     JsonWriter json(out);
-    json.begin_object().field("dataset", dataset).field("method", estimator.name());
+    long cpu_fallback_frames = 0;
+    for (const FrameRecord& f : frames)
+      cpu_fallback_frames += f.method != estimator.name() ? 1 : 0;
+    json.begin_object()
+        .field("dataset", dataset)
+        .field("method", estimator.name())
+        .field("cpu_fallback_frames", cpu_fallback_frames);  // the GPU's failed; see frames[]
     json.key("frames").begin_array();
     for (const FrameRecord& f : frames) {
       const QuadricMapSummary& s = f.summary;
@@ -84,6 +103,7 @@ void write_summary(const std::string& path, const std::string& dataset,
           .field("too_few_samples", s.too_few_samples)
           .field("singular", s.singular)
           .field("ms", f.milliseconds)
+          .field("method", f.method)
           .end_object();
     }
     json.end_array().end_object();
@@ -150,9 +170,11 @@ int run(int argc, char** argv) {
       const Frame frame = dataset->load(i);
       const Clock::time_point t0 = Clock::now();
       const VertexMap vertices = compute_vertex_map(frame.depth, frame.camera);
-      const QuadricMap map = estimator->estimate(vertices);
+      std::string method;
+      const QuadricMap map = estimate(*estimator, vertices, method);
       FrameRecord record{format_stamp(frame.timestamp), frame.timestamp, summarize(map),
-                         std::chrono::duration<double, std::milli>(Clock::now() - t0).count()};
+                         std::chrono::duration<double, std::milli>(Clock::now() - t0).count(),
+                         method};
       if (record.summary.valid == 0) {
         std::cerr << "jpcr_curvature: warning: frame " << i << " (" << record.stamp
                   << "): no valid curvature (" << record.summary.no_centre << " of "

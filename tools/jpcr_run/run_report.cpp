@@ -19,9 +19,12 @@ void write_refinement(JsonWriter& json, const char* name,
     json.null();
     return;
   }
-  json.begin_object()
-      .field("method", r->method)
-      .field("verdict", to_string(r->verdict))
+  json.begin_object().field("method", r->method).key("device");
+  if (r->device.empty())
+    json.null();  // the refiner threw (verdict "error")
+  else
+    json.value(r->device);
+  json.field("verdict", to_string(r->verdict))
       .field("iterations", r->iterations)
       .field("rejected_steps", r->rejected_steps)
       .field("cost", r->cost)
