@@ -32,7 +32,12 @@ void cuda_check_launch(const char* kernel, CUstream_st* stream, const char* file
     error = cudaStreamSynchronize(stream);
     if (error != cudaSuccess) cudaGetLastError();  // not blamed on the next launch as well
   }
-  if (error != cudaSuccess) throw_cuda_error(error, std::string("kernel ") + kernel, file, line);
+  // Without synchronous checks the error may be an earlier launch's, found only now.
+  if (error != cudaSuccess)
+    throw_cuda_error(error,
+                     std::string("kernel ") + kernel +
+                         (cuda_synchronous_checks() ? "" : " (or earlier work on its stream)"),
+                     file, line);
 }
 
 bool cuda_synchronous_checks() {

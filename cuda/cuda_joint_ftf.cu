@@ -237,12 +237,18 @@ struct CudaJointSystem::Device : StreamEvents<4> {  // linearize start/end, prop
     return (kFactors * pixels * scalar + sizeof(double) - 1) / sizeof(double);
   }
 
+  // One at a time, so that the allocations made before one that throws are counted.
   void reserve(std::size_t pixels, std::size_t pattern_size, int blocks, CudaPrecision precision) {
-    allocations +=
-        vertices[0].reserve(pixels) + vertices[1].reserve(pixels) + pattern.reserve(pattern_size) +
-        quadrics.reserve(pixels) + candidate.reserve(pixels) + valid.reserve(pixels) +
-        active.reserve(pixels) + factors.reserve(factor_doubles(pixels, precision)) +
-        partials.reserve(static_cast<std::size_t>(blocks) * kSums) + totals.reserve(kSums);
+    allocations += vertices[0].reserve(pixels);
+    allocations += vertices[1].reserve(pixels);
+    allocations += pattern.reserve(pattern_size);
+    allocations += quadrics.reserve(pixels);
+    allocations += candidate.reserve(pixels);
+    allocations += valid.reserve(pixels);
+    allocations += active.reserve(pixels);
+    allocations += factors.reserve(factor_doubles(pixels, precision));
+    allocations += partials.reserve(static_cast<std::size_t>(blocks) * kSums);
+    allocations += totals.reserve(kSums);
   }
 
   template <typename Scalar>
@@ -308,6 +314,8 @@ void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraInt
                            const NeighbourhoodPattern& pattern,
                            const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& initial) {
   check_pair(frames, poses.size(), initial.status.size(), initial.status.size());
+  if (initial.width() != frames[0].width() || initial.height() != frames[0].height())
+    throw std::invalid_argument("CudaJointSystem: the quadric map differs in size from frame 0");
   const DeviceScope scope(device_->device);
   fill_joint_state(poses, initial, state_);
   upload(frames, camera, pattern);
@@ -492,8 +500,8 @@ JointState CudaJointSystem::candidate() {
   if (!proposed_) throw std::logic_error("CudaJointSystem: candidate() without a propose()");
   Device& d = *device_;
   const DeviceScope scope(d.device);
+  JointState c;  // before the drain, which must wait for the copy into it on an exception
   const DrainOnUnwind drain(d.stream);
-  JointState c;
   c.poses = candidate_poses_;
   c.valid = state_.valid;
   c.quadrics.resize(d.pixels());
@@ -507,11 +515,11 @@ std::vector<PairFactors> CudaJointSystem::factors() {
   if (!linearized_) throw std::logic_error("CudaJointSystem: factors() without a linearize()");
   Device& d = *device_;
   const DeviceScope scope(d.device);
-  const DrainOnUnwind drain(d.stream);
   const std::size_t pixels = d.pixels();
   std::vector<unsigned char> active(pixels);
   const std::size_t scalar = precision_ == CudaPrecision::kDouble ? sizeof(double) : sizeof(float);
   std::vector<unsigned char> raw(kFactors * pixels * scalar);
+  const DrainOnUnwind drain(d.stream);  // after the copies' destinations: destroyed before them
   JPCR_CUDA_CHECK(
       cudaMemcpyAsync(active.data(), d.active.data(), pixels, cudaMemcpyDeviceToHost, d.stream));
   JPCR_CUDA_CHECK(
@@ -558,7 +566,10 @@ RefinementResult CudaJointFrameToFrame::refine(const std::vector<VertexMap>& ver
   std::lock_guard<std::mutex> lock(mutex_);
   system_->load(vertices, camera, params_.quadric.pattern_for(camera.width), initial_poses,
                 initial_quadrics);
-  return run_joint_refinement(*system_, params_, true, name(), initial_quadrics, vertices[0]);
+  RefinementResult result =
+      run_joint_refinement(*system_, params_, true, name(), initial_quadrics, vertices[0]);
+  result.report.device = "cuda";
+  return result;
 }
 
 std::size_t CudaJointFrameToFrame::device_allocations() const {

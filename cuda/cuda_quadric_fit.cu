@@ -184,9 +184,14 @@ struct CudaQuadricFit::Device : StreamEvents<5> {  // start, uploaded, normals, 
   bool poison_outputs = false;
   CudaQuadricFitTiming timing;
 
+  // One at a time, so that the allocations made before one that throws are counted.
   void reserve(std::size_t pixels, std::size_t pattern_size) {
-    allocations += vertices.reserve(pixels) + normals.reserve(pixels) + direction.reserve(pixels) +
-                   quadrics.reserve(pixels) + curvature.reserve(pixels) + status.reserve(pixels);
+    allocations += vertices.reserve(pixels);
+    allocations += normals.reserve(pixels);
+    allocations += direction.reserve(pixels);
+    allocations += quadrics.reserve(pixels);
+    allocations += curvature.reserve(pixels);
+    allocations += status.reserve(pixels);
     if (pattern_size > kParameterPatternCapacity) allocations += pattern.reserve(pattern_size);
   }
 };
@@ -251,6 +256,9 @@ QuadricMap CudaQuadricFit::fit(const VertexMap& vertices, const NormalMap* norma
   d.record(3);
 
   QuadricMap map(width, height);  // the host allocation overlaps the kernel
+  // Destroyed before `map`: an exception below waits for the copies into it first (they return
+  // early into pinned memory, where a copy after the free would write freed memory).
+  const DrainOnUnwind drain_into_map(stream);
   if (d.poison_outputs) {
     poison(map.quadrics);
     poison(map.curvature);

@@ -65,6 +65,14 @@ struct Parity {
 };
 
 constexpr double kFlip = 1e-4;  // 1/m: the parity bound on the curvature RMS
+// With the host's normals the GPU and the double reference differ by FMA contraction: κ RMS
+// 7e-8 to 2.8e-7 1/m, every status equal, on all 28 random frames logged (cuda/NOTES.md). The
+// bounds below leave 35x on the RMS and one flipped pixel per 10⁵; a defect confined to a
+// tile row (317 pixels off by 1e-3 1/m, RMS 8e-5 over the frame) fails them.
+constexpr double kParityRms = 1e-5;  // 1/m
+int flips_allowed(int pixels) {
+  return std::max(1, pixels / 100000);
+}
 
 // The reference: fit_quadric_pixel<double> on the host, as tests/quadric CpuFitEqualsTheReference.
 Parity compare_with_reference(const QuadricMap& gpu, const VertexMap& vertices,
@@ -148,9 +156,35 @@ TEST(CudaQuadricFit, MatchesTheReferenceKernelOnRandomFrames) {
           w, h, static_cast<unsigned long long>(seed + k), p.rms, p.valid_both, p.status_differ,
           p.pixels, fit.last_timing().kernel_ms);
       EXPECT_GT(p.valid_both, p.pixels / 3) << "seed " << seed + k;
-      EXPECT_LE(p.rms, kFlip) << "seed " << seed + k;
-      EXPECT_LE(p.status_differ, p.pixels / 1000) << "seed " << seed + k;
+      EXPECT_LE(p.over, flips_allowed(p.pixels)) << "seed " << seed + k << ", max " << p.max;
+      EXPECT_LE(p.rms_rest, kParityRms) << "seed " << seed + k;
+      EXPECT_LE(p.status_differ, flips_allowed(p.pixels)) << "seed " << seed + k;
     }
+  }
+}
+
+// Float (CudaPrecision::kFloat: selectable, not the default) has its own kernel instance: every
+// element written, and within float's distance from the double reference. On the host, float
+// against double gave κ RMS 3.8e-5 to 1.9e-3 1/m on such frames (step-acceptance flips at about
+// 0.03 % of the pixels, cuda/NOTES.md); the bounds leave 10x. A wrong layout or stride fails them.
+TEST(CudaQuadricFit, FloatIsWithinFloatOfTheReference) {
+  SKIP_WITHOUT_GPU();
+  const std::uint64_t seed = test::test_seed();
+  const QuadricParams params;
+  CudaQuadricFit fit(params, CudaPrecision::kFloat);
+  fit.set_poison_outputs(true);
+  for (const auto& [w, h] : {std::pair{320, 240}, std::pair{317, 239}}) {
+    const SyntheticFrame f = test::random_frame(seed, w, h);
+    const VertexMap vertices = compute_vertex_map(f.frame.depth, f.frame.camera);
+    const NormalMap normals = estimate_normals(vertices, params.normals);
+    const QuadricMap map = fit.estimate(vertices, normals);
+    expect_every_element_written(map);
+    const Parity p = compare_with_reference(map, vertices, normals, params);
+    std::printf("%dx%d float: kappa RMS %.3g 1/m (max %.3g), status differs at %d of %d\n", w, h,
+                p.rms, p.max, p.status_differ, p.pixels);
+    EXPECT_GT(p.valid_both, p.pixels / 3) << "seed " << seed;
+    EXPECT_LE(p.rms, 2e-2) << "seed " << seed;
+    EXPECT_LE(p.status_differ, p.pixels / 1000) << "seed " << seed;
   }
 }
 
@@ -203,8 +237,9 @@ TEST(CudaQuadricFit, PatternsBeyondTheParameterBankUseGlobalMemory) {
   expect_every_element_written(map);
   const Parity p = compare_with_reference(map, vertices, normals, params);
   EXPECT_GT(p.valid_both, p.pixels / 3) << "seed " << seed;
-  EXPECT_LE(p.rms, 1e-4) << "seed " << seed;
-  EXPECT_LE(p.status_differ, p.pixels / 1000) << "seed " << seed;
+  EXPECT_LE(p.over, flips_allowed(p.pixels)) << "seed " << seed << ", max " << p.max;
+  EXPECT_LE(p.rms_rest, kParityRms) << "seed " << seed;
+  EXPECT_LE(p.status_differ, flips_allowed(p.pixels)) << "seed " << seed;
 }
 
 TEST(CudaQuadricFit, ReusesDeviceBuffersAcrossFrames) {
