@@ -42,6 +42,27 @@ else
   echo "SKIP: the numpy checks (no python3-numpy); the test reports skipped"
   numpy_missing=1
 fi
+# A window that fails (a degeneracy threshold no scene meets) fails every keyframe it covers:
+# report.json counts the three (it counted the window's last keyframe alone), the frames are
+# untrusted with the cause named, per frame and in the summary, and the inputs are recorded.
+printf 'joint:\n  degeneracy_threshold: 0.5\n' > "$tmp/strict.yaml"
+expect 0 "3 of 4 frames are not trusted (window: 3 degenerate)" -- "$run" --dataset "$tmp/seq" \
+  --method j-full --window 4 --params "$tmp/strict.yaml" --frames 0:4 --out "$tmp/strict"
+/usr/bin/python3 - "$tmp" <<'PY' || fail=1
+import json, sys
+t = sys.argv[1]
+r = json.load(open(t + "/strict/report.json"))
+assert r["keyframes_with_failed_refinement"] == 3 and r["keyframes_on_front_end_motion"] == 3, r
+assert r["frames_trusted"] == 1 and r["frames_untrusted"] == 3, r
+assert r["untrusted_causes"] == {"window: degenerate": 3}, r["untrusted_causes"]
+assert r["params"] == t + "/strict.yaml" and r["config"] is None and r["first_frame"] == 0, r
+f = r["frame_records"]
+assert [x["trusted"] for x in f] == [True, False, False, False], f
+assert [x["window"] for x in f] == [None, "degenerate", "degenerate", "degenerate"], f
+assert [x["dataset_index"] for x in f] == [0, 1, 2, 3], f
+assert all(k["map"] + ".npy" in __import__("os").listdir(t + "/strict/curvature")
+           for k in r["keyframe_records"]), r["keyframe_records"]
+PY
 expect 0 "icp-ftf" -- "$run" --dataset "$tmp/seq" --method icp-ftf --out "$tmp/icp"
 n=$(ls "$tmp/icp/curvature" | wc -l)
 [ "$n" = 0 ] || { echo "FAIL: icp-ftf wrote $n curvature maps"; fail=1; }
@@ -85,7 +106,11 @@ expect 0 "icp-ftf " -- "$run" --dataset "$tmp/tum" --config "$src/configs/tum_fr
 /usr/bin/python3 - "$tmp" <<'PY' || fail=1
 import json, sys
 t = sys.argv[1]
-r = json.load(open(t + "/tumrun/report.json"))["errors"]
+report = json.load(open(t + "/tumrun/report.json"))
+# The run's frame 0 is the dataset's frame 3: both numbers are in the records.
+assert report["first_frame"] == 3, report["first_frame"]
+assert [f["dataset_index"] - f["index"] for f in report["frame_records"]] == [3] * 14
+r = report["errors"]
 e = json.load(open(t + "/tumeval.json"))
 pairs = [(r["ate_rmse_m"], e["ate"]["translation_m"]["rmse"]),
          (r["rpe_frame_translation_rmse_m"], e["rpe_per_frame"]["translation_m"]["rmse"]),

@@ -196,7 +196,11 @@ int run_main(int argc, char** argv) {
       write_trajectory(out.path("front_end.txt"), runner.front_end_trajectory());
       write_trajectory(out.path("keyframes.txt"), keyframe_trajectory(runner));
       write_file_atomically(out.path("report.json"), [&](std::ostream& o) {
-        run::write_report(o, args.get("dataset"), runner, front_errors, errors, progress.seconds());
+        const run::RunInputs inputs{args.get("dataset"), range.first,
+                                    args.has("config") ? args.get("config") : "",
+                                    args.has("params") ? args.get("params") : "",
+                                    to_string(cli::device_from(args, params))};
+        run::write_report(o, inputs, runner, front_errors, errors, progress.seconds());
       });
     });
     out.commit();

@@ -6,6 +6,7 @@
 
 #include "jpcr/io/json_writer.hpp"
 #include "jpcr/io/number_format.hpp"
+#include "jpcr/io/synthetic_writer.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr::run {
@@ -71,12 +72,55 @@ std::optional<TrajectoryErrors> evaluate(const Trajectory& gt, const Trajectory&
   }
 }
 
-void write_report(std::ostream& out, const std::string& dataset, const KeyframePipeline& p,
+namespace {
+
+void optional_string(JsonWriter& json, const char* name, const std::string& value) {
+  json.key(name);
+  if (value.empty())
+    json.null();
+  else
+    json.value(value);
+}
+
+void optional_verdict(JsonWriter& json, const char* name,
+                      const std::optional<RefinementVerdict>& v) {
+  json.key(name);
+  if (v)
+    json.value(to_string(*v));
+  else
+    json.null();
+}
+
+std::size_t untrusted_frames(const KeyframePipeline& p) {
+  std::size_t untrusted = 0;
+  for (std::size_t i = 0; i < p.frames().size(); ++i)
+    untrusted += p.verdicts(i).trusted() ? 0 : 1;
+  return untrusted;
+}
+
+}  // namespace
+
+std::map<std::string, std::size_t> untrusted_causes(const KeyframePipeline& p) {
+  std::map<std::string, std::size_t> causes;
+  for (std::size_t i = 0; i < p.frames().size(); ++i) {
+    const FrameVerdicts v = p.verdicts(i);
+    if (v.front_end != IcpVerdict::ok)
+      ++causes[std::string("front_end: ") + to_string(v.front_end)];
+    if (v.pair && !usable(*v.pair)) ++causes[std::string("pair: ") + to_string(*v.pair)];
+    if (v.window && !usable(*v.window)) ++causes[std::string("window: ") + to_string(*v.window)];
+  }
+  return causes;
+}
+
+void write_report(std::ostream& out, const RunInputs& inputs, const KeyframePipeline& p,
                   const std::optional<TrajectoryErrors>& front_end,
                   const std::optional<TrajectoryErrors>& refined, double seconds) {
   JsonWriter json(out);
-  json.begin_object()
-      .field("dataset", dataset)
+  json.begin_object().field("dataset", inputs.dataset);
+  optional_string(json, "config", inputs.config);
+  optional_string(json, "params", inputs.params);
+  json.field("device_requested", inputs.device)
+      .field("first_frame", inputs.first_frame)
       .field("method", to_string(p.params().method))
       .field("window", p.params().window)
       .field("frames", p.frames().size())
@@ -84,14 +128,22 @@ void write_report(std::ostream& out, const std::string& dataset, const KeyframeP
       .field("seconds", seconds);
   write_errors(json, "front_end_errors", front_end);
   write_errors(json, "errors", refined);
+  // Whether the result can be trusted, in numbers (verdicts.txt has it per frame).
+  const std::size_t untrusted = untrusted_frames(p);
+  json.field("frames_trusted", p.frames().size() - untrusted)
+      .field("frames_untrusted", untrusted)
+      .key("untrusted_causes")
+      .begin_object();
+  for (const auto& [cause, count] : untrusted_causes(p))
+    json.field(cause, count);
+  json.end_object();
   std::size_t failed_tracking = 0, failed_refinement = 0, on_front_end = 0;
   for (const PipelineFrame& f : p.frames())
     failed_tracking += f.kept_last_motion ? 1 : 0;
-  const auto failed = [](const std::optional<RefinementReport>& r) {
-    return r && !usable(r->verdict);
-  };
   for (const PipelineKeyframe& k : p.keyframes()) {
-    failed_refinement += failed(k.pair) || failed(k.window) ? 1 : 0;
+    // The window's report sits on its last keyframe; every keyframe it covers shares its verdict.
+    const FrameVerdicts v = p.verdicts(static_cast<std::size_t>(k.frame));
+    failed_refinement += (v.pair && !usable(*v.pair)) || (v.window && !usable(*v.window)) ? 1 : 0;
     on_front_end += k.used_front_end ? 1 : 0;
   }
   json.field("frames_with_failed_tracking", failed_tracking)
@@ -99,26 +151,34 @@ void write_report(std::ostream& out, const std::string& dataset, const KeyframeP
       // no refinement that covers them succeeded: their poses are the front end's motion
       .field("keyframes_on_front_end_motion", on_front_end);
   json.key("frame_records").begin_array();
-  for (const PipelineFrame& f : p.frames()) {
+  for (std::size_t i = 0; i < p.frames().size(); ++i) {
+    const PipelineFrame& f = p.frames()[i];
+    const FrameVerdicts v = p.verdicts(i);
     json.begin_object()
         .field("index", f.index)
+        .field("dataset_index", inputs.first_frame + static_cast<std::size_t>(f.index))
         .field("stamp", f.front_end.timestamp)
         .field("keyframe", f.keyframe)
         .field("icp_verdict", to_string(f.icp_verdict))
-        .field("kept_last_motion", f.kept_last_motion)
-        .field("track_ms", f.track_ms)
-        .end_object();
+        .field("kept_last_motion", f.kept_last_motion);
+    optional_verdict(json, "pair", v.pair);
+    optional_verdict(json, "window", v.window);
+    json.field("trusted", v.trusted()).field("track_ms", f.track_ms).end_object();
   }
   json.end_array();
   json.key("keyframe_records").begin_array();
   for (const PipelineKeyframe& k : p.keyframes()) {
-    json.begin_object().field("frame", k.frame).field("stamp", k.refined.timestamp);
+    json.begin_object()
+        .field("frame", k.frame)
+        .field("dataset_index", inputs.first_frame + static_cast<std::size_t>(k.frame))
+        .field("stamp", k.refined.timestamp);
     write_refinement(json, "pair", k.pair);
     write_refinement(json, "window", k.window);
-    json.field("used_front_end", k.used_front_end)
-        .field("refine_ms", k.refine_ms)
-        .field("curvature", k.curvature)
-        .end_object();
+    json.field("used_front_end", k.used_front_end).field("refine_ms", k.refine_ms);
+    optional_string(json, "curvature", k.curvature);
+    // the maps' name (curvature/<map>.npy): the timestamp to the microsecond, as text
+    optional_string(json, "map", k.curvature.empty() ? "" : format_stamp(k.refined.timestamp));
+    json.end_object();
   }
   json.end_array().end_object();
   out << '\n';
@@ -144,33 +204,24 @@ void write_verdicts(std::ostream& out, const KeyframePipeline& p) {
   }
 }
 
-namespace {
-
-std::size_t untrusted_frames(const KeyframePipeline& p) {
-  std::size_t untrusted = 0;
-  for (std::size_t i = 0; i < p.frames().size(); ++i)
-    untrusted += p.verdicts(i).trusted() ? 0 : 1;
-  return untrusted;
-}
-
-}  // namespace
-
 std::string untrusted_warning(const KeyframePipeline& p) {
   const std::size_t untrusted = untrusted_frames(p);
-  std::map<std::string, int> front_end;  // failures by verdict
-  for (std::size_t i = 0; i < p.frames().size(); ++i) {
-    const FrameVerdicts v = p.verdicts(i);
-    if (v.front_end != IcpVerdict::ok) ++front_end[to_string(v.front_end)];
-  }
   if (untrusted == 0) return {};
   std::ostringstream line;
   line << untrusted << " of " << p.frames().size() << " frames are not trusted";
-  const char* separator = " (front end: ";
-  for (const auto& [verdict, count] : front_end) {
-    line << separator << count << ' ' << verdict;
-    separator = ", ";
+  // "front_end: degenerate" → "(front end: 7 degenerate, 1 diverged; window: 3 degenerate)"
+  std::string stage;
+  for (const auto& [cause, count] : untrusted_causes(p)) {
+    const std::size_t colon = cause.find(": ");
+    std::string name = cause.substr(0, colon);
+    if (name == "front_end") name = "front end";
+    line << (stage.empty()   ? " ("
+             : name == stage ? ", "
+                             : "; ")
+         << (name == stage ? "" : name + ": ") << count << ' ' << cause.substr(colon + 2);
+    stage = name;
   }
-  line << (front_end.empty() ? "" : ")") << "; verdicts.txt says which";
+  line << (stage.empty() ? "" : ")") << "; verdicts.txt says which";
   return line.str();
 }
 
