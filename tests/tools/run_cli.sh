@@ -140,8 +140,16 @@ before=$(cd "$tmp/ftf" && find . -type f | sort | xargs md5sum)
 pid=$!
 wait_for_staging "$tmp/ftf" && kill -INT $pid
 wait $pid; rc=$?
-{ [ $rc = 130 ] && grep -q "interrupted: stopped by a signal at frame .* is left as it was" "$tmp/int.log"; } ||
+{ [ $rc = 130 ] && grep -q "interrupted: stopped by SIGINT (Ctrl-C) at frame .* is left as it was" "$tmp/int.log" &&
+  grep -q "^jpcr_run: stopping after the current step" "$tmp/int.log"; } ||
   { echo "FAIL: SIGINT: exit $rc, output: $(cat "$tmp/int.log")"; fail=1; }
+# SIGTERM (a service manager's stop): the same, with 128 + 15, the shell's convention.
+"$run" --dataset "$tmp/long" --method j-ftf --out "$tmp/ftf" > "$tmp/term.log" 2>&1 &
+pid=$!
+wait_for_staging "$tmp/ftf" && kill -TERM $pid
+wait $pid; rc=$?
+{ [ $rc = 143 ] && grep -q "interrupted: stopped by SIGTERM at frame" "$tmp/term.log"; } ||
+  { echo "FAIL: SIGTERM: exit $rc, output: $(cat "$tmp/term.log")"; fail=1; }
 [ "$(cd "$tmp/ftf" && find . -type f | sort | xargs md5sum)" = "$before" ] ||
   { echo "FAIL: an interrupted run changed OUT"; fail=1; }
 [ -z "$(ls -A "$tmp" | grep partial)" ] || { echo "FAIL: staging left after SIGINT"; fail=1; }

@@ -118,7 +118,7 @@ pid=$!
 for _ in $(seq 200); do compgen -G "$tmp/.long.partial-*" > /dev/null && break; sleep 0.1; done
 kill -INT $pid
 wait $pid; rc=$?
-{ [ $rc = 130 ] && grep -q "interrupted: stopped by a signal at frame .*nothing written" "$tmp/int.log"; } ||
+{ [ $rc = 130 ] && grep -q "interrupted: stopped by SIGINT (Ctrl-C) at frame .*nothing written" "$tmp/int.log"; } ||
   { echo "FAIL: SIGINT: exit $rc, output: $(cat "$tmp/int.log")"; fail=1; }
 [ ! -e "$tmp/long" ] && [ -z "$(ls -A "$tmp" | grep partial)" ] ||
   { echo "FAIL: an interrupted jpcr_synth left output: $(ls -A "$tmp")"; fail=1; }

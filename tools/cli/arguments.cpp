@@ -197,7 +197,7 @@ int run_program(const std::string& program, const std::function<int()>& body) {
     return 2;
   } catch (const Interrupted& e) {
     std::cerr << program << ": interrupted: " << e.what() << '\n';
-    return 130;
+    return e.exit_status();
   } catch (const InputError& e) {
     std::cerr << program << ": error: " << e.what() << '\n';
     return 1;

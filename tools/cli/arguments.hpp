@@ -65,7 +65,7 @@ void parse_image_size(const std::string& option, const std::string& text, int& w
 
 /// Runs body() and maps failures to exit codes: UsageError → 2 with a --help hint;
 /// jpcr::InputError and other exceptions → 1 with "error: ..." on stderr; Interrupted
-/// (stop_signal.hpp) → 130 with "interrupted: ...".
+/// (stop_signal.hpp) → 128 + the signal (130 SIGINT, 143 SIGTERM) with "interrupted: ...".
 int run_program(const std::string& program, const std::function<int()>& body);
 
 }  // namespace jpcr::cli

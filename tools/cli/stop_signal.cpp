@@ -1,13 +1,22 @@
 #include "cli/stop_signal.hpp"
 
+#include <unistd.h>
+
+#include <cerrno>
 #include <csignal>
+#include <cstdio>
+#include <cstring>
 #include <ctime>
 
 namespace jpcr::cli {
 
 namespace {
 
-volatile std::sig_atomic_t g_stop = 0;
+volatile std::sig_atomic_t g_stop = 0;  // the first signal's number, 0 before one
+// "\nPROGRAM: stopping after the current step (another Ctrl-C after 2 s ends it at once)\n",
+// made when the handler is installed: the handler may only write(2) it.
+char g_acknowledgement[256] = "";
+std::size_t g_acknowledgement_length = 0;
 volatile std::sig_atomic_t g_first_second = 0;  // CLOCK_MONOTONIC seconds of the first signal
 
 // A signal this soon after the first is the same request delivered twice: Ctrl-C under a
@@ -35,12 +44,24 @@ extern "C" void on_stop_signal(int signal_number) {
     return;
   }
   g_first_second = static_cast<std::sig_atomic_t>(now);
-  g_stop = 1;
+  g_stop = signal_number;
+  const int saved = errno;  // write(2) may change it under the interrupted code
+  [[maybe_unused]] const ssize_t ignored =
+      write(STDERR_FILENO, g_acknowledgement, g_acknowledgement_length);
+  errno = saved;
 }
 
 }  // namespace
 
-void install_stop_signal_handler() {
+void install_stop_signal_handler(OnStop on_stop) {
+  g_acknowledgement_length = 0;  // the handler writes nothing while the message is made
+  if (on_stop == OnStop::kSayItStops) {
+    std::snprintf(g_acknowledgement, sizeof g_acknowledgement,
+                  "\n%s: stopping after the current step (another Ctrl-C after %ld s ends it at "
+                  "once)\n",
+                  program_invocation_short_name, kDuplicateSeconds);
+    g_acknowledgement_length = std::strlen(g_acknowledgement);
+  }
   struct sigaction action {};
   action.sa_handler = on_stop_signal;
   sigemptyset(&action.sa_mask);
@@ -53,7 +74,10 @@ bool stop_requested() {
 }
 
 void throw_if_stopped(const std::string& where) {
-  if (stop_requested()) throw Interrupted("stopped by a signal at " + where);
+  const int signal_number = g_stop;
+  if (signal_number == 0) return;
+  const char* name = signal_number == SIGINT ? "SIGINT (Ctrl-C)" : "SIGTERM";
+  throw Interrupted(std::string("stopped by ") + name + " at " + where, signal_number);
 }
 
 }  // namespace jpcr::cli

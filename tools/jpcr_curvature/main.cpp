@@ -155,13 +155,14 @@ int run(int argc, char** argv) {
     cli::check_dataset_run(args, *dataset, params.quadric);
     cli::require_not_results_of(args, "report.json", "jpcr_run");
     // Written into a staging directory and moved into OUT at the end (io/staged_output.hpp).
+    // Ctrl-C stops at the next frame, OUT unchanged; installed before the staging exists.
+    cli::install_stop_signal_handler(cli::OnStop::kSayItStops);
     StagedOutput out(args.get("out"), {"curvature", "curvature_png", "ply", "summary.json"});
     cli::require_inputs_apart_from(out, args);
     const CurvatureWriter writer(out.directory(), args.get_flag("ply"), colors);
     std::cerr << "jpcr_curvature: " << dataset->description() << ", " << estimator->name()
               << ", frames " << range.first << ":" << range.last << '\n';
 
-    cli::install_stop_signal_handler();  // Ctrl-C stops at the next frame, OUT unchanged
     cli::Progress progress("jpcr_curvature");
     std::vector<FrameRecord> records;
     for (std::size_t i = range.first; i < range.last; ++i) {

@@ -214,7 +214,8 @@ int run(int argc, char** argv) {
     cli::Progress progress("jpcr_odometry", start);
     Trajectory trajectory;
     std::size_t failed = 0;
-    cli::install_stop_signal_handler();  // Ctrl-C stops at the next frame, nothing written
+    // Ctrl-C stops at the next frame, nothing written
+    cli::install_stop_signal_handler(cli::OnStop::kSayItStops);
     for (std::size_t i = 0; i < frames; ++i) {
       cli::throw_if_stopped("frame " + std::to_string(i) + "; nothing written");
       const Frame frame = source->load(i);

@@ -119,6 +119,9 @@ int run_main(int argc, char** argv) {
     cli::require_not_results_of(args, "summary.json", "jpcr_curvature");
     // Everything is written into a staging directory and moved into OUT at the end: a run that
     // fails leaves OUT as it was, and a run into an earlier run's OUT replaces all its outputs.
+    // Ctrl-C or SIGTERM stops the run at the next frame; OUT is left as it was. Installed
+    // before the staging directory exists, so that a signal from here on removes it.
+    cli::install_stop_signal_handler(cli::OnStop::kSayItStops);
     StagedOutput out(args.get("out"),
                      {"trajectory.txt", "verdicts.txt", "front_end.txt", "keyframes.txt",
                       "report.json", "curvature", "curvature_png", "ply"});
@@ -140,8 +143,6 @@ int run_main(int argc, char** argv) {
         },
         refiners);
     self = &runner;
-    // Ctrl-C or SIGTERM stops the run at the next frame; OUT is left as it was.
-    cli::install_stop_signal_handler();
     const std::string unchanged = "; " + out.target() + " is left as it was";
     cli::Progress progress("jpcr_run");
     for (std::size_t i = range.first; i < range.last; ++i) {

@@ -115,7 +115,7 @@ int run(int argc, char** argv) {
     writer.comment = command.str();
     cli::Progress progress("jpcr_synth", start);
     // Ctrl-C stops at the next frame and writes nothing (the writer's staging is removed).
-    cli::install_stop_signal_handler();
+    cli::install_stop_signal_handler(cli::OnStop::kSayItStops);
     writer.progress = [&](std::size_t done, std::size_t total) {
       cli::throw_if_stopped("frame " + std::to_string(done) + "; nothing written to " +
                             args.get("out"));
