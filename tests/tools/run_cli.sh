@@ -63,6 +63,11 @@ assert [x["dataset_index"] for x in f] == [0, 1, 2, 3], f
 assert all(k["map"] + ".npy" in __import__("os").listdir(t + "/strict/curvature")
            for k in r["keyframe_records"]), r["keyframe_records"]
 PY
+# Options that change nothing for the method are said (they were taken silently).
+expect 0 "warning: --window has no effect: method icp-ftf refines no windows" -- "$run" \
+  --dataset "$tmp/seq" --method icp-ftf --window 7 --out "$tmp/icp"
+expect 0 "warning: --ply has no effect: method icp-ftf fits no quadrics" -- "$run" \
+  --dataset "$tmp/seq" --method icp-ftf --ply --out "$tmp/icp"
 expect 0 "icp-ftf" -- "$run" --dataset "$tmp/seq" --method icp-ftf --out "$tmp/icp"
 n=$(ls "$tmp/icp/curvature" | wc -l)
 [ "$n" = 0 ] || { echo "FAIL: icp-ftf wrote $n curvature maps"; fail=1; }

@@ -62,8 +62,11 @@ int run_main(int argc, char** argv) {
   args.required("dataset", "TUM directory (jpcr_synth writes one) or MRPT .rawlog")
       .option("config", "camera YAML (default: the dataset's camera.yaml or rawlog intrinsics)")
       .option("method",
-              "pipeline | icp-ftf | j-ftf | j-full | q-full | icp-bundle (default: params)")
-      .option("window", "keyframes per J-full / Q-full / ICP-bundle window, 2-16 (default: params)")
+              "pipeline | icp-ftf | j-ftf | j-full | q-full | icp-bundle (default: --params' "
+              "pipeline.method, built in: pipeline)")
+      .option("window",
+              "keyframes per J-full / Q-full / ICP-bundle window, 2-16 (default: --params' "
+              "pipeline.window, built in: 5)")
       .option("params", "parameter YAML (sections frontend, quadric, joint, icp_bundle, pipeline)")
       .option("frames", "FIRST:LAST, 0-based, LAST excluded, or N for frame N alone (default: all)")
       .required("out",
@@ -87,6 +90,15 @@ int run_main(int argc, char** argv) {
     if (!args.parse(argc, argv)) return 0;
     Params params;
     PipelineParams pipeline = cli::pipeline_params_from(args, &params);
+    // Options that change nothing for the method are said, not silently taken (scripts may pass
+    // one set of options to every method, as tools/reproduce.sh does).
+    const bool pairs_only =
+        pipeline.method == PipelineMethod::kIcpFtf || pipeline.method == PipelineMethod::kJointFtf;
+    if (args.has("window") && pairs_only)
+      std::cerr << "jpcr_run: warning: --window has no effect: method "
+                << to_string(pipeline.method) << " refines no windows\n";
+    if (args.get_flag("ply") && pipeline.method == PipelineMethod::kIcpFtf)
+      std::cerr << "jpcr_run: warning: --ply has no effect: method icp-ftf fits no quadrics\n";
     if (!pipeline.keep_history)
       throw InputError(args.get("params") +
                        ": pipeline.keep_history: false is for live runs (jpcr_node); jpcr_run "

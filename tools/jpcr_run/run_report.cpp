@@ -121,9 +121,13 @@ void write_report(std::ostream& out, const RunInputs& inputs, const KeyframePipe
   optional_string(json, "params", inputs.params);
   json.field("device_requested", inputs.device)
       .field("first_frame", inputs.first_frame)
-      .field("method", to_string(p.params().method))
-      .field("window", p.params().window)
-      .field("frames", p.frames().size())
+      .field("method", to_string(p.params().method));
+  const PipelineMethod method = p.params().method;
+  if (method == PipelineMethod::kIcpFtf || method == PipelineMethod::kJointFtf)
+    json.key("window").null();  // not applicable: the method refines no windows
+  else
+    json.field("window", p.params().window);
+  json.field("frames", p.frames().size())
       .field("keyframes", p.keyframes().size())
       .field("seconds", seconds);
   write_errors(json, "front_end_errors", front_end);
