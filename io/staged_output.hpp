@@ -85,7 +85,9 @@ class StagedOutput {
 /// Throws InputError when `target` is `input` itself (the same directory after links and ".."),
 /// or holds another dataset (depth.txt or associations.txt): commit() would replace the
 /// dataset's entries of the layout's names, e.g. the curvature/ ground truth of a synthetic
-/// dataset. `option` names the input in the message ("--dataset").
+/// dataset; or lies in one of the folders of a dataset directory `input` (depth/, rgb/,
+/// curvature/, normals/, curvature_png/, ply/). `option` names the input in the message
+/// ("--dataset").
 void require_output_apart_from(const std::string& target, const std::string& input,
                                const std::string& option);
 

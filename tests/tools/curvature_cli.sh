@@ -98,6 +98,14 @@ cp -r "$tmp/seq" "$tmp/seq_copy"
 expect 1 "holds a dataset (depth.txt)" -- "$curv" --dataset "$tmp/seq" --out "$tmp/seq_copy"
 cmp -s "$tmp/truth.npy" "$tmp/seq_copy/curvature/0.000000.npy" ||
   { echo "FAIL: the copy's ground truth changed"; fail=1; }
+# OUT in one of the dataset's folders (its ground truth, its depth): refused, nothing added
+# there; a new folder beside them is fine.
+expect 1 "lies in --dataset .*'s curvature/" -- "$curv" --dataset "$tmp/seq" --out "$tmp/seq/curvature"
+expect 1 "lies in --dataset .*'s depth/" -- "$build/tools/jpcr_run" --dataset "$tmp/seq" --method icp-ftf \
+  --out "$tmp/seq/depth/run"
+[ "$(ls "$tmp/seq/curvature" | wc -l)" = 3 ] && [ ! -e "$tmp/seq/depth/run" ] ||
+  { echo "FAIL: outputs landed in the dataset's folders"; fail=1; }
+expect 0 "wrote 3 curvature maps" -- "$curv" --dataset "$tmp/seq" --out "$tmp/seq/mine"
 # OUT = another program's results: jpcr_run would replace jpcr_curvature's maps and leave its
 # summary.json behind, and the other way round.
 expect 1 "holds jpcr_curvature's results (summary.json)" -- "$build/tools/jpcr_run" \
