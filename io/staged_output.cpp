@@ -244,8 +244,9 @@ void require_output_apart_from(const std::string& target, const std::string& inp
   // One of the dataset's own folders (its ground-truth curvature/, its depth/) or a folder in
   // one: the outputs would land among its files.
   if (!fs::is_directory(input, ec)) return;
-  const fs::path inside = fs::weakly_canonical(fs::absolute(target, ec), ec)
-                              .lexically_relative(fs::weakly_canonical(fs::absolute(input, ec), ec));
+  const fs::path inside =
+      fs::weakly_canonical(fs::absolute(target, ec), ec)
+          .lexically_relative(fs::weakly_canonical(fs::absolute(input, ec), ec));
   if (inside.empty() || *inside.begin() == ".." || inside.is_absolute()) return;
   const std::string first = inside.begin()->string();
   for (const char* folder : {"depth", "rgb", "curvature", "normals", "curvature_png", "ply"})
