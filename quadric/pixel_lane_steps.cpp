@@ -15,7 +15,7 @@ constexpr int kLanes = kPixelLanes;
 // D_j L_ij = H_ij − Σ_k L_ik (D_k L_jk), kept in the upper triangle (H[j][i]) while L_ij
 // replaces H_ij in the lower one; then L y = −g and D Lᵀ Δ = y. No square roots, one division
 // per pivot. The pivot test is cholesky_factor's (its L_jj² is D_j).
-JPCR_SIMD_CLONES void lane_steps(const PixelLaneSums& s, double damping,
+JPCR_SIMD_CLONES void lane_steps(const PixelLaneSums& s, const double damping[kPixelLanes],
                                  double delta[6][kPixelLanes], bool ok[kPixelLanes]) {
   const auto tri = [](int a, int b) { return a >= b ? a * (a + 1) / 2 + b : b * (b + 1) / 2 + a; };
   double H[6][6][kLanes];  // lower: H, then L_ij; upper: D_j L_ij
@@ -32,7 +32,7 @@ JPCR_SIMD_CLONES void lane_steps(const PixelLaneSums& s, double damping,
     const float* y = s.products[tri(kGammaColumn[i], kColR)];
 #pragma omp simd
     for (int l = 0; l < kLanes; ++l) {
-      H[i][i][l] *= 1.0 + damping;
+      H[i][i][l] *= 1.0 + damping[l];
       delta[i][l] = -kGammaSign[i] * y[l];
     }
   }
@@ -162,8 +162,8 @@ JPCR_SIMD_CLONES void lane_updates(LaneQuadrics& q, const double delta[6][kLanes
 
 }  // namespace
 
-void pixel_lane_steps(const PixelLaneSums& sums, double damping, double delta[6][kPixelLanes],
-                      bool ok[kPixelLanes]) {
+void pixel_lane_steps(const PixelLaneSums& sums, const double damping[kPixelLanes],
+                      double delta[6][kPixelLanes], bool ok[kPixelLanes]) {
   lane_steps(sums, damping, delta, ok);
 }
 

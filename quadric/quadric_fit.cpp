@@ -76,9 +76,9 @@ class PixelGroupFit {
       to_float();
       pixel_lane_sums(in_, planes_.at(0, u0, v), planes_.at(1, u0, v), planes_.at(2, u0, v),
                       offsets_.data(), static_cast<int>(offsets_.size()), !last, sums_);
-      if (!last) pixel_lane_steps(sums_, p_.damping, delta_, ok_);
+      if (!last) pixel_lane_steps(sums_, damping_, delta_, ok_);
       for (int l = 0; l < kPixelLanes; ++l)
-        decide(l, it == 0, last);
+        decide(l, last);
       // Undone lanes return to their previous quadric; stepping lanes keep theirs as previous.
       for (int i = 0; i < LaneQuadrics::kRows; ++i) {
         for (int l = 0; l < kPixelLanes; ++l) {
@@ -90,12 +90,15 @@ class PixelGroupFit {
       pixel_lane_updates(q_, delta_, take_, p_, converged_);
       bool any = false;
       for (int l = 0; l < kPixelLanes; ++l) {
-        active_[l] = take_[l] && !converged_[l];
+        stepped_[l] = stepped_[l] || take_[l];
+        kept_[l] = kept_[l] || (take_[l] && converged_[l]);  // a step this small: where it stands
+        active_[l] = (take_[l] && !converged_[l]) || retry_[l];
         any |= active_[l];
       }
       if (!any) break;
     }
     for (int l = 0; l < lanes; ++l) {
+      if (status_[l] == QuadricStatus::kValid && !kept_[l]) status_[l] = QuadricStatus::kNoStep;
       if (status_[l] == QuadricStatus::kValid)
         map.set(u0 + l, v, lane_quadric(l));
       else
@@ -108,6 +111,9 @@ class PixelGroupFit {
   void start(int l, int u, int v) {
     active_[l] = false;
     previous_cost_[l] = 1e300;  // as fit_quadric_pixel
+    damping_[l] = p_.damping;
+    kept_[l] = p_.iterations == 0;
+    stepped_[l] = retry_[l] = false;
     Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
     Eigen::Vector3f centre = Eigen::Vector3f::Zero();
     status_[l] = QuadricStatus::kNoCentre;
@@ -143,24 +149,32 @@ class PixelGroupFit {
     }
   }
 
-  // Lane l after a pass: undo_ where the last step raised the mean weighted cost or left fewer
-  // than min_samples inliers, take_ where it takes another step; every other active lane stops
-  // here (or is invalid).
-  void decide(int l, bool first, bool last) {
-    undo_[l] = take_[l] = false;
+  // Lane l after a pass: undo_ where the last step raised the gated cost or left fewer
+  // than min_samples inliers (and retry_ from the plane with more damping where no step was kept
+  // yet), take_ where it takes another step; every other active lane stops here (or is
+  // invalid). As fit_quadric_pixel.
+  void decide(int l, bool last) {
+    undo_[l] = take_[l] = retry_[l] = false;
     if (!active_[l]) return;
     active_[l] = false;
     const int count = static_cast<int>(sums_.count[l]);
-    const double cost = double(sums_.inliers[l]) / std::max(1, count);  // mean Σ w r², inliers
+    const double cost = double(sums_.gated[l]);  // Σ w(e) e² over the samples with depth
     const bool too_few = count < p_.min_samples;
-    if (cost > previous_cost_[l] || (!first && too_few)) {  // as fit_quadric_pixel
+    if (stepped_[l] && (cost > previous_cost_[l] || too_few)) {
       undo_[l] = true;
+      stepped_[l] = false;
+      if (!kept_[l]) {
+        damping_[l] *= kRetryDampingFactor;
+        retry_[l] = true;  // the next pass sums at the plane again and steps from it
+      }
       return;
     }
     if (too_few) {  // the starting plane
       status_[l] = QuadricStatus::kTooFewSamples;
       return;
     }
+    kept_[l] = kept_[l] || stepped_[l];
+    stepped_[l] = false;  // checked
     if (last) return;
     if (!ok_[l]) {
       status_[l] = QuadricStatus::kSingular;
@@ -191,10 +205,13 @@ class PixelGroupFit {
   PixelLaneSums sums_{};
   LaneQuadrics q_{}, previous_{};
   double previous_cost_[kPixelLanes];
+  double damping_[kPixelLanes];   // λ of each lane's next step: p.damping, more after a retry
   double delta_[6][kPixelLanes];  // each lane's step (pixel_lane_steps)
   QuadricStatus status_[kPixelLanes];
   bool active_[kPixelLanes], ok_[kPixelLanes], undo_[kPixelLanes], take_[kPixelLanes],
-      converged_[kPixelLanes];
+      converged_[kPixelLanes], retry_[kPixelLanes];
+  bool stepped_[kPixelLanes];  // the lane's quadric is a step no pass has checked yet
+  bool kept_[kPixelLanes];     // a step was kept: the lane's quadric is a fit, not the plane
 };
 
 }  // namespace

@@ -41,6 +41,7 @@ enum class QuadricStatus : unsigned char {
   kNoNormal,       // no initial normal (too few neighbours for the plane fit)
   kTooFewSamples,  // fewer than min_samples samples passed the gate
   kSingular,       // the 6x6 system is singular or not finite
+  kNoStep,         // no step from the starting plane lowered the cost: the plane is no fit
 };
 
 /// A read-only view of a vertex map that device code can hold (row-major, NaN = invalid).
@@ -60,12 +61,16 @@ JPCR_HD bool is_finite_value(float x) {
   return x - x == 0.0f;
 }
 
-/// Σ w JᵀJ (lower triangle) and Σ w J r of one 6-parameter problem, plus the cost Σ w r².
+/// Σ w JᵀJ (lower triangle) and Σ w J r of one 6-parameter problem over the samples inside the
+/// gate (count of them), their cost Σ w r², and the gated cost Σ w(e) e² over every sample with
+/// depth, e = r inside the gate and e = ±gate outside (pixel_lane_sums' `gated`): a robust cost
+/// over a set of samples that no step changes, which Quad IT's step test compares.
 template <typename Scalar>
 struct NormalEquations6 {
   Eigen::Matrix<Scalar, 6, 6> H = Eigen::Matrix<Scalar, 6, 6>::Zero();
   Eigen::Matrix<Scalar, 6, 1> g = Eigen::Matrix<Scalar, 6, 1>::Zero();
   Scalar cost = 0;
+  Scalar gated = 0;
   int count = 0;
 
   JPCR_HD void add(const Eigen::Matrix<Scalar, 6, 1>& J, Scalar r, Scalar w) {
@@ -76,8 +81,11 @@ struct NormalEquations6 {
       g(i) += wJi * r;
     }
     cost += w * r * r;
+    gated += w * r * r;
     ++count;
   }
+  /// A sample outside the gate: w(gate) gate² to the gated cost only.
+  JPCR_HD void add_outside(Scalar w_at_gate, Scalar gate) { gated += w_at_gate * gate * gate; }
 };
 
 /// The weight constant n₀ and the residual gate at a quadric centre p̄ (m).
@@ -109,9 +117,12 @@ JPCR_HD void accumulate_quadric_samples(const QuadricT<Scalar>& q, const VertexV
     if (!is_finite_value(Xf.z())) continue;
     const Vector3 X = Xf.template cast<Scalar>();
     const QuadricLinearization<Scalar> l = linearize_quadric(q, X);
-    if (!(l.r <= limits.gate && l.r >= -limits.gate)) continue;
-    const Scalar w = fair_weight(l.r, (X - q.center).squaredNorm(), limits.n0);
-    ne.add(l.J, l.r, w);
+    const Scalar d2 = (X - q.center).squaredNorm();
+    if (!(l.r <= limits.gate && l.r >= -limits.gate)) {
+      ne.add_outside(fair_weight(limits.gate, d2, limits.n0), limits.gate);
+      continue;
+    }
+    ne.add(l.J, l.r, fair_weight(l.r, d2, limits.n0));
   }
 }
 
@@ -139,10 +150,19 @@ JPCR_HD bool step_converged(const Eigen::Matrix<double, 6, 1>& delta, const Quad
          fabs(delta(2)) < p.offset_tolerance && dk < p.curvature_tolerance;
 }
 
+/// The damping of a retried first step: the first step from the plane that raised the cost is
+/// retried from the plane with the damping times this, while passes remain.
+constexpr double kRetryDampingFactor = 10.0;
+
 /// Quad IT at pixel (u, v): starts from the plane of `normal` at p̄ = vertices(u, v) and runs up
-/// to p.iterations Gauss-Newton steps. A step is kept only if it does not raise the mean
-/// weighted cost Σ w r² / n (the Levenberg-Marquardt safeguard; under range noise the undamped
-/// rotation steps can overshoot). On kValid, q holds the fitted quadric.
+/// to p.iterations Gauss-Newton passes. A step is kept only if it does not raise the gated cost
+/// Σ w(e) e² (NormalEquations6::gated; the Levenberg-Marquardt safeguard: under range noise the
+/// undamped rotation steps can overshoot). The mean over the inliers, compared before, rose for
+/// a step that took in more samples though the fit improved. A later step that raises it is undone
+/// and the fit stops with the steps before it; the first one is retried from the plane with the
+/// damping times kRetryDampingFactor, since the plane is a start, not a fit. When no step is ever
+/// kept the pixel is kNoStep (its curvature would be the start's 0, method.md §3). On kValid, q
+/// holds the fitted quadric.
 template <typename Scalar>
 JPCR_HD QuadricStatus fit_quadric_pixel(const VertexView& vertices, const PixelOffset* pattern,
                                         int pattern_size, int u, int v,
@@ -156,28 +176,39 @@ JPCR_HD QuadricStatus fit_quadric_pixel(const VertexView& vertices, const PixelO
   q.t_z = q.a = q.b = q.c = Scalar(0);
   QuadricT<Scalar> previous = q;
   double previous_cost = 1e300;
+  double damping = p.damping;
+  bool kept = p.iterations == 0;  // a step was kept (no steps asked: the plane is the answer)
+  bool stepped = false;           // q is a step from `previous` that no pass has checked yet
   // One pass more than steps: the last pass only checks the last step's cost.
   for (int it = 0; it <= p.iterations; ++it) {
     NormalEquations6<Scalar> ne;
     accumulate_quadric_samples(q, vertices, pattern, pattern_size, u, v, p, ne);
-    const double cost = double(ne.cost) / (ne.count > 0 ? ne.count : 1);
+    const double cost = double(ne.gated);
     const bool too_few = ne.count < p.min_samples;
     // A step that made the fit worse, or left fewer than min_samples inliers (method.md §3: a
-    // fit on fewer is invalid), is undone, and the fit stops.
-    if (cost > previous_cost || (it > 0 && too_few)) {
+    // fit on fewer is invalid), is undone; the fit stops, or retries the first step damped.
+    if (stepped && (cost > previous_cost || too_few)) {
       q = previous;
-      break;
+      stepped = false;
+      if (kept) break;
+      damping *= kRetryDampingFactor;
+      continue;  // the next pass sums at the plane again and steps from it
     }
     if (too_few) return QuadricStatus::kTooFewSamples;  // the starting plane
+    kept = kept || stepped;
     if (it == p.iterations) break;
     previous = q;
     previous_cost = cost;
     Eigen::Matrix<double, 6, 1> delta;
-    if (!solve_damped_step(ne, p.damping, delta)) return QuadricStatus::kSingular;
+    if (!solve_damped_step(ne, damping, delta)) return QuadricStatus::kSingular;
     apply_quadric_update(q, QuadricVector<Scalar>(delta.template cast<Scalar>()));
-    if (step_converged(delta, p)) break;
+    stepped = true;
+    if (step_converged(delta, p)) {
+      kept = true;  // a step this small: the fit is where it stands
+      break;
+    }
   }
-  return QuadricStatus::kValid;
+  return kept ? QuadricStatus::kValid : QuadricStatus::kNoStep;
 }
 
 }  // namespace jpcr

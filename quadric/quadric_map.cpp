@@ -73,6 +73,9 @@ QuadricMapSummary summarize(const QuadricMap& map) {
       case QuadricStatus::kSingular:
         ++s.singular;
         break;
+      case QuadricStatus::kNoStep:
+        ++s.no_step;
+        break;
     }
   }
   return s;

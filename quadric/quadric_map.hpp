@@ -43,7 +43,7 @@ struct QuadricMap {
 /// Pixels counted by status, for reports and warnings.
 struct QuadricMapSummary {
   std::size_t pixels = 0, valid = 0, no_centre = 0, no_normal = 0, too_few_samples = 0,
-              singular = 0;
+              singular = 0, no_step = 0;
 };
 QuadricMapSummary summarize(const QuadricMap& map);
 

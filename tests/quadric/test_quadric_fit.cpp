@@ -411,5 +411,33 @@ TEST(QuadricFit, APatternWiderThanTheImageStillEqualsTheReferenceKernel) {
   EXPECT_LT(a.rms, 1e-4);
 }
 
+// A pixel whose first step from the plane raised the cost kept the plane and was reported valid
+// with κ = (0, 0) exactly: under 1 % range noise, 10.6 % of the valid pixels of jpcr_synth's
+// room_spheres at 320x240 (11 % at 640x480), 1.4 % without noise. The step test now compares the
+// gated cost (a fixed sample set: the mean over the inliers rose for a step that took in more of
+// them), retries a first step that fails from the plane with more damping, and a pixel whose steps
+// all fail is kNoStep, invalid, never a valid 0. Measured here: no exact 0 of 55460 valid pixels,
+// 183 kNoStep (0.33 %); both Quad IT paths agree.
+TEST(QuadricFit, NoValidPixelIsTheUnfittedStartingPlane) {
+  const CameraIntrinsics camera = synthetic_camera(320, 240);
+  const QuadricFit fit;
+  const Fitted f = fit_scene(room_with(Sphere{{0, 0, 1.2}, 0.3}), camera,
+                             look_from({0.1, -1.2, 1.4}, {0, 0, 1.2}), fit, "range:1");
+  int plane = 0;
+  for (std::size_t i = 0; i < f.map.status.size(); ++i) {
+    const Quadric& q = f.map.quadrics[i];
+    plane += f.map.status[i] == QuadricStatus::kValid && q.a == 0 && q.b == 0 && q.c == 0;
+  }
+  const QuadricMapSummary s = summarize(f.map);
+  std::printf("valid %zu, valid with a = b = c = 0: %d, no step %zu\n", s.valid, plane, s.no_step);
+  EXPECT_GT(s.valid, s.pixels * 2 / 3);
+  EXPECT_EQ(plane, 0);
+  EXPECT_LT(s.no_step, s.valid / 100);
+  const KernelAgreement a =
+      compare_with_reference_kernel(compute_vertex_map(f.frame.frame.depth, camera), {});
+  EXPECT_LT(a.status_mismatch, camera.width * camera.height / 1000);
+  EXPECT_LT(a.flipped, a.pixels / 200);
+}
+
 }  // namespace
 }  // namespace jpcr

@@ -102,6 +102,7 @@ void write_summary(const std::string& path, const std::string& dataset,
           .field("no_normal", s.no_normal)
           .field("too_few_samples", s.too_few_samples)
           .field("singular", s.singular)
+          .field("no_step", s.no_step)
           .field("ms", f.milliseconds)
           .field("method", f.method)
           .end_object();
