@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cerrno>  // program_invocation_short_name
 #include <cstdio>
 #include <iostream>
 
@@ -56,8 +57,9 @@ FrameRange parse_frame_range(const std::string& text, std::size_t size) {
     r.last = number(text.substr(colon + 1), size);
   }
   if (r.last > size && r.first < size)
-    std::cerr << "warning: --frames " << text << ": the dataset has " << size << " frames; running "
-              << r.first << ":" << size << '\n';
+    std::cerr << program_invocation_short_name << ": warning: --frames " << text
+              << ": the dataset has " << size << " frames; running " << r.first << ":" << size
+              << '\n';
   r.last = std::min(r.last, size);
   if (r.first >= r.last)
     throw UsageError("--frames '" + text + "' selects no frame of the " + std::to_string(size) +

@@ -103,6 +103,12 @@ int run_main(int argc, char** argv) {
       throw InputError(args.get("params") +
                        ": pipeline.keep_history: false is for live runs (jpcr_node); jpcr_run "
                        "writes every frame's pose and needs true");
+    // Every option is checked before the dataset is opened (a rawlog's first read takes long).
+    const ComputeDevice device = cli::device_from(args, params);
+#ifdef JPCR_HAVE_DDS
+    if (!args.get_flag("dds") && (args.has("domain") || args.has("cyclone-uri")))
+      throw cli::UsageError("--domain and --cyclone-uri need --dds");
+#endif
     std::optional<CameraIntrinsics> camera;
     if (args.has("config")) camera = load_camera_yaml(args.get("config"));
     const std::unique_ptr<FrameSource> dataset =
@@ -114,8 +120,6 @@ int run_main(int argc, char** argv) {
               << '\n';
 
 #ifdef JPCR_HAVE_DDS
-    if (!args.get_flag("dds") && (args.has("domain") || args.has("cyclone-uri")))
-      throw cli::UsageError("--domain and --cyclone-uri need --dds");
     std::optional<DdsParticipant> participant;
     std::optional<cli::PipelinePublisher> dds;
     if (args.get_flag("dds")) {
@@ -125,8 +129,7 @@ int run_main(int argc, char** argv) {
     }
 #endif
     const KeyframePipeline* self = nullptr;
-    const RefinerFactory refiners =
-        device_refiner_factory(cli::device_from(args, params), std::cerr);
+    const RefinerFactory refiners = device_refiner_factory(device, std::cerr);
     cli::check_dataset_run(args, *dataset, pipeline.joint.quadric);
     cli::require_not_results_of(args, "summary.json", "jpcr_curvature");
     // Everything is written into a staging directory and moved into OUT at the end: a run that
@@ -183,6 +186,7 @@ int run_main(int argc, char** argv) {
     }
     // finish() refines the last, partial window: its failure is said as the loop's are.
     const bool window_before = runner.keyframes().back().window.has_value();
+    if (!pairs_only) progress.note("finishing: the last, partial window (if any) is refined");
     runner.finish();
     if (const PipelineKeyframe& k = runner.keyframes().back();
         !window_before && k.window && k.window->verdict == RefinementVerdict::kError)
@@ -209,10 +213,9 @@ int run_main(int argc, char** argv) {
       write_trajectory(out.path("front_end.txt"), runner.front_end_trajectory());
       write_trajectory(out.path("keyframes.txt"), keyframe_trajectory(runner));
       write_file_atomically(out.path("report.json"), [&](std::ostream& o) {
-        const run::RunInputs inputs{args.get("dataset"), range.first,
-                                    args.has("config") ? args.get("config") : "",
-                                    args.has("params") ? args.get("params") : "",
-                                    to_string(cli::device_from(args, params))};
+        const run::RunInputs inputs{
+            args.get("dataset"), range.first, args.has("config") ? args.get("config") : "",
+            args.has("params") ? args.get("params") : "", to_string(device)};
         run::write_report(o, inputs, runner, front_errors, errors, progress.seconds());
       });
     });
