@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -48,21 +49,27 @@ long temporary_owner(const std::string& name) {
 }
 
 // Once per directory and process: the temporaries there of processes killed before they could
-// remove them. Best effort; a directory that cannot be read is left as it is.
-void remove_abandoned_temporaries(const fs::path& directory) {
-  static std::mutex mutex;
-  static std::set<std::string> swept;
-  {
-    const std::lock_guard<std::mutex> lock(mutex);
-    if (!swept.insert(directory.string()).second) return;
-  }
-  std::error_code ec;
-  for (const fs::directory_entry& e :
-       fs::directory_iterator(directory.empty() ? fs::path(".") : directory, ec)) {
-    const long pid = temporary_owner(e.path().filename().string());
-    std::error_code ignored;
-    if (pid > 0 && process_is_gone(pid) && e.is_regular_file(ignored))
-      fs::remove(e.path(), ignored);
+// remove them, 10 minutes old or more (a PID another PID namespace sees as gone may still be
+// writing). Best effort: nothing here throws, and what cannot be read or removed stays.
+void remove_abandoned_temporaries(const fs::path& directory) noexcept {
+  try {
+    static std::mutex mutex;
+    static std::set<std::string> swept;
+    {
+      const std::lock_guard<std::mutex> lock(mutex);
+      if (!swept.insert(directory.string()).second) return;
+    }
+    const auto old_enough = fs::file_time_type::clock::now() - std::chrono::minutes(10);
+    std::error_code ec;
+    fs::directory_iterator it(directory.empty() ? fs::path(".") : directory, ec);
+    for (; !ec && it != fs::directory_iterator(); it.increment(ec)) {
+      const long pid = temporary_owner(it->path().filename().string());
+      std::error_code ignored;
+      if (pid > 0 && process_is_gone(pid) && it->is_regular_file(ignored) &&
+          fs::last_write_time(it->path(), ignored) < old_enough && !ignored)
+        fs::remove(it->path(), ignored);
+    }
+  } catch (...) {  // out of memory for the set: the sweep waits for another run
   }
 }
 

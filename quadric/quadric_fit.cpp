@@ -32,8 +32,8 @@ class VertexPlanes {
       plane.assign(size, std::numeric_limits<float>::quiet_NaN());
     for (int v = 0; v < vertices.height(); ++v) {
       for (int u = 0; u < vertices.width(); ++u) {
-        // A vertex with any coordinate not finite is no sample (its residual would not be
-        // finite, and fit_quadric_pixel's gate drops it): all three NaN.
+        // A vertex with any coordinate not finite is no sample (fit_quadric_pixel skips it
+        // too): all three NaN.
         const Eigen::Vector3f& X = vertices(u, v);
         if (!X.allFinite()) continue;
         const std::size_t i = index(u, v);

@@ -114,7 +114,8 @@ JPCR_HD void accumulate_quadric_samples(const QuadricT<Scalar>& q, const VertexV
     const int su = u + pattern[k].du, sv = v + pattern[k].dv;
     if (!vertices.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
     const Eigen::Vector3f& Xf = vertices(su, sv);
-    if (!is_finite_value(Xf.z())) continue;
+    // A vertex with any coordinate not finite is no sample (as VertexPlanes of the dense fit).
+    if (!is_finite_value(Xf.x()) || !is_finite_value(Xf.y()) || !is_finite_value(Xf.z())) continue;
     const Vector3 X = Xf.template cast<Scalar>();
     const QuadricLinearization<Scalar> l = linearize_quadric(q, X);
     const Scalar d2 = (X - q.center).squaredNorm();

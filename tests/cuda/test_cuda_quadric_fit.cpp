@@ -50,7 +50,7 @@ void expect_every_element_written(const QuadricMap& map) {
   EXPECT_EQ(sentinel_words(map.status), 0u);
   for (std::size_t i = 0; i < map.status.size(); ++i) {
     const bool valid = map.status[i] == QuadricStatus::kValid;
-    ASSERT_LE(static_cast<int>(map.status[i]), static_cast<int>(QuadricStatus::kSingular));
+    ASSERT_LE(static_cast<int>(map.status[i]), static_cast<int>(QuadricStatus::kNoStep));
     ASSERT_EQ(std::isfinite(map.curvature[i].x()), valid) << "pixel " << i;
     ASSERT_EQ(std::isfinite(map.direction[i].x()), valid) << "pixel " << i;
   }
@@ -66,9 +66,11 @@ struct Parity {
 
 constexpr double kFlip = 1e-4;  // 1/m: the parity bound on the curvature RMS
 // With the host's normals the GPU and the double reference differ by FMA contraction: κ RMS
-// 7e-8 to 2.8e-7 1/m, every status equal, on all 28 random frames logged (cuda/NOTES.md). The
-// bounds below leave 35x on the RMS and one flipped pixel per 10⁵; a defect confined to a
-// tile row (317 pixels off by 1e-3 1/m, RMS 8e-5 over the frame) fails them.
+// 7e-8 to 2.8e-7 1/m, every status equal, on all 28 random frames logged (cuda/NOTES.md; before
+// Quad IT's step test compared the gated cost and retried the first step, 4e6fe3b, which can
+// flip a tie differently: to be measured again on a GPU). The bounds below leave 35x on the RMS
+// and one flipped pixel per 10⁵; a defect confined to a tile row (317 pixels off by 1e-3 1/m,
+// RMS 8e-5 over the frame) fails them.
 constexpr double kParityRms = 1e-5;  // 1/m
 int flips_allowed(int pixels) {
   return std::max(1, pixels / 100000);

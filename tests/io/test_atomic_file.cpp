@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <cerrno>
+#include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -74,8 +75,9 @@ long gone_pid() {
 }
 
 // A writer killed outright leaves its hidden temporary; the next write into that directory
-// removes it, and only it: not a live process's (PID 1, this one's), not a file that merely
-// looks alike.
+// removes it once it is 10 minutes old, and only it: not a live process's (PID 1, this one's),
+// not a younger one (another PID namespace may see a live writer's PID as gone), not a file that
+// merely looks alike.
 TEST(AtomicFile, TheTemporaryOfAKilledWriterIsRemovedByTheNextWrite) {
   test::TempDir dir;
   const long gone = gone_pid();
@@ -86,10 +88,16 @@ TEST(AtomicFile, TheTemporaryOfAKilledWriterIsRemovedByTheNextWrite) {
       ".a.txt.jpcr-tmp." + std::to_string(::getpid()) + ".7",  // this one (another thread)
       "a.txt.jpcr-tmp." + std::to_string(gone) + ".0",         // not hidden
       ".a.txt.jpcr-tmp." + std::to_string(gone),               // no counter
-      ".a.txt.tmp." + std::to_string(gone) + ".0"};            // another tag
-  dir.write(abandoned, "half");
-  for (const std::string& name : kept)
+      ".a.txt.tmp." + std::to_string(gone) + ".0",             // another tag
+      ".c.txt.jpcr-tmp." + std::to_string(gone) + ".1"};       // young: written just now
+  const auto eleven_minutes_ago =
+      std::filesystem::file_time_type::clock::now() - std::chrono::minutes(11);
+  for (const std::string& name : kept) {
     dir.write(name, "x");
+    if (name[1] != 'c') std::filesystem::last_write_time(dir.file(name), eleven_minutes_ago);
+  }
+  dir.write(abandoned, "half");
+  std::filesystem::last_write_time(dir.file(abandoned), eleven_minutes_ago);
   write_file_atomically(dir.file("b.txt"), [](std::ostream& out) { out << "new"; });
   EXPECT_FALSE(std::filesystem::exists(dir.file(abandoned)));
   for (const std::string& name : kept)

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <atomic>
 #include <cerrno>
 #include <csignal>
 #include <cstdio>
@@ -13,10 +14,11 @@ namespace jpcr::cli {
 namespace {
 
 volatile std::sig_atomic_t g_stop = 0;  // the first signal's number, 0 before one
-// "\nPROGRAM: stopping after the current step (another Ctrl-C after 2 s ends it at once)\n",
-// made when the handler is installed: the handler may only write(2) it.
+// "\nPROGRAM: stopping after the current step (a second signal after 2 s ends it at once)\n",
+// made when the handler is installed: the handler may only write(2) it. Its length is the
+// handler's to read: 0 while the message is being made.
 char g_acknowledgement[256] = "";
-std::size_t g_acknowledgement_length = 0;
+volatile std::sig_atomic_t g_acknowledgement_length = 0;
 volatile std::sig_atomic_t g_first_second = 0;  // CLOCK_MONOTONIC seconds of the first signal
 
 // A signal this soon after the first is the same request delivered twice: Ctrl-C under a
@@ -47,7 +49,7 @@ extern "C" void on_stop_signal(int signal_number) {
   g_stop = signal_number;
   const int saved = errno;  // write(2) may change it under the interrupted code
   [[maybe_unused]] const ssize_t ignored =
-      write(STDERR_FILENO, g_acknowledgement, g_acknowledgement_length);
+      write(STDERR_FILENO, g_acknowledgement, static_cast<std::size_t>(g_acknowledgement_length));
   errno = saved;
 }
 
@@ -55,12 +57,14 @@ extern "C" void on_stop_signal(int signal_number) {
 
 void install_stop_signal_handler(OnStop on_stop) {
   g_acknowledgement_length = 0;  // the handler writes nothing while the message is made
+  std::atomic_signal_fence(std::memory_order_seq_cst);
   if (on_stop == OnStop::kSayItStops) {
     std::snprintf(g_acknowledgement, sizeof g_acknowledgement,
-                  "\n%s: stopping after the current step (another Ctrl-C after %ld s ends it at "
-                  "once)\n",
+                  "\n%s: stopping after the current step (a second signal after %ld s ends it "
+                  "at once)\n",
                   program_invocation_short_name, kDuplicateSeconds);
-    g_acknowledgement_length = std::strlen(g_acknowledgement);
+    std::atomic_signal_fence(std::memory_order_seq_cst);  // the text before its length
+    g_acknowledgement_length = static_cast<std::sig_atomic_t>(std::strlen(g_acknowledgement));
   }
   struct sigaction action {};
   action.sa_handler = on_stop_signal;

@@ -192,6 +192,8 @@ int run(int argc, char** argv) {
     }
     out.write(
         [&] { write_summary(out.path("summary.json"), args.get("dataset"), *estimator, records); });
+    // A signal during the last frame or the summary: said to stop, it stops before OUT changes.
+    cli::throw_if_stopped("the end of the run; " + out.target() + " is left as it was");
     out.commit();
     std::cout << "wrote " << records.size() << " curvature maps to " << out.target() << '\n';
     return 0;

@@ -232,6 +232,8 @@ int run(int argc, char** argv) {
                std::to_string(tracker.keyframe_indices().size()) + " keyframes  " +
                    std::to_string(failed) + " failed");
     }
+    // A signal during the last frame: said to stop, it stops (nothing written).
+    cli::throw_if_stopped("the end of the run; nothing written");
     run.seconds = std::chrono::duration<double>(Clock::now() - start).count();
     run.keyframes = tracker.keyframe_indices();
     // Missing parent directories are made only now, so a run that fails creates nothing.

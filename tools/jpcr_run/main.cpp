@@ -219,6 +219,7 @@ int run_main(int argc, char** argv) {
         run::write_report(o, inputs, runner, front_errors, errors, progress.seconds());
       });
     });
+    cli::throw_if_stopped("writing the outputs" + unchanged);  // a signal since the last check
     out.commit();
     std::cout << "wrote " << refined.size() << " poses, " << runner.keyframes().size()
               << " keyframes and " << writer.written() << " curvature maps to " << out.target()
