@@ -1,6 +1,7 @@
 // A temporary directory for a test, removed when the test ends.
 #pragma once
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -40,6 +41,16 @@ class TempDir {
  private:
   std::filesystem::path path_;
 };
+
+/// The PID of a child that has exited and been reaped: no process has it (until the kernel hands
+/// it out again, which takes a full cycle of the PID space).
+inline pid_t finished_process() {
+  const pid_t child = ::fork();
+  if (child == 0) ::_exit(0);
+  int status = 0;
+  ::waitpid(child, &status, 0);
+  return child;
+}
 
 /// A tmpfs of `size` ("64k") mounted at `path` (made here) while it lives: a small disk for the
 /// tests of a full one. mounted() is false where this process may not mount (not root, a

@@ -100,6 +100,30 @@ PairInputs pair_inputs(std::uint64_t seed) {
   return in;
 }
 
+// One iteration of the CPU reference from a random pair's start: the state, the linearisation,
+// the pose steps and the step.
+struct CpuIteration {
+  NeighbourhoodPattern pattern;
+  JointState state;
+  ReducedSystem lin;
+  std::vector<Vector6d> steps;
+  bool solved = false;
+  JointStep step;
+};
+
+CpuIteration cpu_iteration(const test::RandomPair& pair, const JointParams& params, double lambda) {
+  CpuIteration it;
+  it.pattern = params.quadric.pattern.for_width(pair.camera.width);
+  const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
+  it.state = initial_joint_state({Eigen::Isometry3d::Identity(), pair.start}, initial);
+  const JointSystem cpu(pair.vertices, pair.camera, it.pattern, params.terms(true),
+                        JointSampling::kReference);
+  it.lin = cpu.linearize(it.state, lambda);
+  it.solved = JointSystem::solve_poses(it.lin, lambda, it.steps);
+  if (it.solved) it.step = cpu.step(it.state, it.lin, lambda, it.steps);
+  return it;
+}
+
 // The parity tests' inputs, checked on the CPU (runs without a GPU too): a random pair overlaps
 // (measured 34-72 % of the pixels active on 8 seeds; the bound is 12.5 %) and its start pose is
 // 1 cm / 1° off the truth.
@@ -130,17 +154,13 @@ TEST(CudaJointFrameToFrame, OneIterationEqualsTheCpuReference) {
   for (std::uint64_t k = 0; k < 3; ++k) {
     const auto [width, height] = sizes[k];
     const test::RandomPair pair = test::random_pair(seed + k, width, height);
-    const NeighbourhoodPattern pattern = params.quadric.pattern.for_width(pair.camera.width);
-    const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
-    const JointState state =
-        initial_joint_state({Eigen::Isometry3d::Identity(), pair.start}, initial);
-
-    const JointSystem cpu(pair.vertices, pair.camera, pattern, params.terms(true),
-                          JointSampling::kReference);
-    const ReducedSystem cpu_lin = cpu.linearize(state, lambda);
-    std::vector<Vector6d> cpu_steps;
-    ASSERT_TRUE(JointSystem::solve_poses(cpu_lin, lambda, cpu_steps)) << "seed " << seed + k;
-    const JointStep cpu_step = cpu.step(state, cpu_lin, lambda, cpu_steps);
+    const CpuIteration ref = cpu_iteration(pair, params, lambda);
+    ASSERT_TRUE(ref.solved) << "seed " << seed + k;
+    const NeighbourhoodPattern& pattern = ref.pattern;
+    const JointState& state = ref.state;
+    const ReducedSystem& cpu_lin = ref.lin;
+    const std::vector<Vector6d>& cpu_steps = ref.steps;
+    const JointStep& cpu_step = ref.step;
 
     CudaJointSystem gpu(params.terms(true));
     gpu.set_poison_outputs(true);
@@ -209,16 +229,13 @@ TEST(CudaJointFrameToFrame, OneFloatIterationIsWithinFloatOfTheCpuReference) {
   const double lambda = params.initial_damping;
   for (const auto& [width, height] : {std::pair{320, 240}, std::pair{317, 239}}) {
     const test::RandomPair pair = test::random_pair(seed, width, height);
-    const NeighbourhoodPattern pattern = params.quadric.pattern.for_width(pair.camera.width);
-    const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
-    const JointState state =
-        initial_joint_state({Eigen::Isometry3d::Identity(), pair.start}, initial);
-    const JointSystem cpu(pair.vertices, pair.camera, pattern, params.terms(true),
-                          JointSampling::kReference);
-    const ReducedSystem cpu_lin = cpu.linearize(state, lambda);
-    std::vector<Vector6d> cpu_steps;
-    ASSERT_TRUE(JointSystem::solve_poses(cpu_lin, lambda, cpu_steps)) << "seed " << seed;
-    const JointStep cpu_step = cpu.step(state, cpu_lin, lambda, cpu_steps);
+    const CpuIteration ref = cpu_iteration(pair, params, lambda);
+    ASSERT_TRUE(ref.solved) << "seed " << seed;
+    const NeighbourhoodPattern& pattern = ref.pattern;
+    const JointState& state = ref.state;
+    const ReducedSystem& cpu_lin = ref.lin;
+    const std::vector<Vector6d>& cpu_steps = ref.steps;
+    const JointStep& cpu_step = ref.step;
 
     CudaJointSystem gpu(params.terms(true), CudaPrecision::kFloat);
     gpu.set_poison_outputs(true);

@@ -1,5 +1,4 @@
 #include <sys/stat.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -65,22 +64,13 @@ TEST(AtomicFile, AFullDiskIsNamedAndKeepsThePreviousContent) {
   EXPECT_EQ(test::count_files(dir.file("small")), 1);
 }
 
-// A PID that no longer exists: a child's that has exited and been reaped.
-long gone_pid() {
-  const pid_t child = ::fork();
-  if (child == 0) ::_exit(0);
-  int status = 0;
-  ::waitpid(child, &status, 0);
-  return child;
-}
-
 // A writer killed outright leaves its hidden temporary; the next write into that directory
 // removes it once it is 10 minutes old, and only it: not a live process's (PID 1, this one's),
 // not a younger one (another PID namespace may see a live writer's PID as gone), not a file that
 // merely looks alike.
 TEST(AtomicFile, TheTemporaryOfAKilledWriterIsRemovedByTheNextWrite) {
   test::TempDir dir;
-  const long gone = gone_pid();
+  const long gone = test::finished_process();
   ASSERT_TRUE(process_is_gone(gone));
   const std::string abandoned = ".a.txt.jpcr-tmp." + std::to_string(gone) + ".0";
   const std::vector<std::string> kept = {

@@ -1,4 +1,3 @@
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdlib>
@@ -251,22 +250,12 @@ TEST(StagedOutput, BadTargetsAreInputErrorsNamingThem) {
   }
 }
 
-// The PID of a child that has exited and been reaped: no process has it (until the kernel
-// hands it out again, which takes a full cycle of the PID space).
-pid_t finished_process() {
-  const pid_t child = ::fork();
-  if (child == 0) ::_exit(0);
-  int status = 0;
-  ::waitpid(child, &status, 0);
-  return child;
-}
-
 TEST(StagedOutput, StagingOfAKilledRunIsRemovedAndALiveOneKept) {
   test::TempDir dir;
   const std::string target = dir.file("run");
-  const std::string dead = dir.file(".run.partial-" + std::to_string(finished_process()));
+  const std::string dead = dir.file(".run.partial-" + std::to_string(test::finished_process()));
   const std::string alive = dir.file(".run.partial-" + std::to_string(::getppid()));
-  const std::string other = dir.file(".other.partial-" + std::to_string(finished_process()));
+  const std::string other = dir.file(".other.partial-" + std::to_string(test::finished_process()));
   const std::string not_a_pid = dir.file(".run.partial-12ab");
   for (const std::string& d : {dead, alive, other, not_a_pid})
     fs::create_directories(d + "/curvature");
@@ -283,7 +272,7 @@ TEST(StagedOutput, StagingOfAKilledRunIsRemovedAndALiveOneKept) {
 TEST(StagedOutput, EntriesSetAsideByARunKilledInCommitGoBack) {
   test::TempDir dir;
   const std::string target = dir.file("run");
-  const std::string dead = dir.file(".run.partial-" + std::to_string(finished_process()));
+  const std::string dead = dir.file(".run.partial-" + std::to_string(test::finished_process()));
   fs::create_directories(target);
   fs::create_directories(dead + "/.previous/curvature");
   write(dead + "/.previous/curvature/old.npy", "an earlier run's map");
