@@ -97,6 +97,10 @@ PipelineMethod parse_pipeline_method(const std::string& name) {
                    "' (choices: icp-ftf, j-ftf, j-full, q-full, icp-bundle, pipeline)");
 }
 
+bool refines_windows(PipelineMethod method) {
+  return method != PipelineMethod::kIcpFtf && method != PipelineMethod::kJointFtf;
+}
+
 void PipelineParams::validate() const {
   if (window < 2 || window > kMaxWindowFrames)
     throw InputError("window: must be in [2, " + std::to_string(kMaxWindowFrames) + "] keyframes");

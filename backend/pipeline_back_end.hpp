@@ -46,6 +46,9 @@ enum class PipelineMethod { kIcpFtf, kJointFtf, kJointFull, kFixedQuadrics, kIcp
 const char* to_string(PipelineMethod method);
 /// Throws InputError listing the choices on an unknown name.
 PipelineMethod parse_pipeline_method(const std::string& name);
+/// Whether the method refines windows of keyframes (J-full, Q-full, ICP-bundle, the pipeline);
+/// ICP-ftf and J-ftf work on pairs only, so `window` changes nothing for them.
+bool refines_windows(PipelineMethod method);
 
 struct PipelineParams {
   PipelineMethod method = PipelineMethod::kPipeline;

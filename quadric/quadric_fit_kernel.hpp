@@ -62,14 +62,13 @@ JPCR_HD bool is_finite_value(float x) {
 }
 
 /// Σ w JᵀJ (lower triangle) and Σ w J r of one 6-parameter problem over the samples inside the
-/// gate (count of them), their cost Σ w r², and the gated cost Σ w(e) e² over every sample with
+/// gate (count of them), and the gated cost Σ w(e) e² over every sample with
 /// depth, e = r inside the gate and e = ±gate outside (pixel_lane_sums' `gated`): a robust cost
 /// over a set of samples that no step changes, which Quad IT's step test compares.
 template <typename Scalar>
 struct NormalEquations6 {
   Eigen::Matrix<Scalar, 6, 6> H = Eigen::Matrix<Scalar, 6, 6>::Zero();
   Eigen::Matrix<Scalar, 6, 1> g = Eigen::Matrix<Scalar, 6, 1>::Zero();
-  Scalar cost = 0;
   Scalar gated = 0;
   int count = 0;
 
@@ -80,7 +79,6 @@ struct NormalEquations6 {
         H(i, j) += wJi * J(j);
       g(i) += wJi * r;
     }
-    cost += w * r * r;
     gated += w * r * r;
     ++count;
   }

@@ -92,8 +92,7 @@ int run_main(int argc, char** argv) {
     PipelineParams pipeline = cli::pipeline_params_from(args, &params);
     // Options that change nothing for the method are said, not silently taken (scripts may pass
     // one set of options to every method, as tools/reproduce.sh does).
-    const bool pairs_only =
-        pipeline.method == PipelineMethod::kIcpFtf || pipeline.method == PipelineMethod::kJointFtf;
+    const bool pairs_only = !refines_windows(pipeline.method);
     if (args.has("window") && pairs_only)
       std::cerr << "jpcr_run: warning: --window has no effect: method "
                 << to_string(pipeline.method) << " refines no windows\n";

@@ -122,8 +122,7 @@ void write_report(std::ostream& out, const RunInputs& inputs, const KeyframePipe
   json.field("device_requested", inputs.device)
       .field("first_frame", inputs.first_frame)
       .field("method", to_string(p.params().method));
-  const PipelineMethod method = p.params().method;
-  if (method == PipelineMethod::kIcpFtf || method == PipelineMethod::kJointFtf)
+  if (!refines_windows(p.params().method))
     json.key("window").null();  // not applicable: the method refines no windows
   else
     json.field("window", p.params().window);
