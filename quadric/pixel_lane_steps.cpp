@@ -14,26 +14,35 @@ constexpr int kLanes = kPixelLanes;
 // H = L D Lᵀ per lane, column by column: D_j = H_jj − Σ_k L_jk (D_k L_jk), and for i > j
 // D_j L_ij = H_ij − Σ_k L_ik (D_k L_jk), kept in the upper triangle (H[j][i]) while L_ij
 // replaces H_ij in the lower one; then L y = −g and D Lᵀ Δ = y. No square roots, one division
-// per pivot. The pivot test is cholesky_factor's (its L_jj² is D_j).
+// per pivot. The pivot test is cholesky_factor's (its L_jj² is D_j). As solve_damped_step, the
+// system is solved in the range units of range_unit_scales, S[i][l] the scales of lane l.
 JPCR_SIMD_CLONES void lane_steps(const PixelLaneSums& s, const double damping[kPixelLanes],
-                                 double delta[6][kPixelLanes], bool ok[kPixelLanes]) {
+                                 const double range[kPixelLanes], double delta[6][kPixelLanes],
+                                 bool ok[kPixelLanes]) {
   const auto tri = [](int a, int b) { return a >= b ? a * (a + 1) / 2 + b : b * (b + 1) / 2 + a; };
   double H[6][6][kLanes];  // lower: H, then L_ij; upper: D_j L_ij
   double inverse[6][kLanes], floor[kLanes];
+  double S[6][kLanes];
   bool good[kLanes];
+#pragma omp simd
+  for (int l = 0; l < kLanes; ++l) {
+    S[0][l] = S[1][l] = 1.0;  // range_unit_scales
+    S[2][l] = range[l];
+    S[3][l] = S[4][l] = S[5][l] = 1.0 / range[l];
+  }
   for (int i = 0; i < 6; ++i) {
     for (int j = 0; j <= i; ++j) {
       const double sign = kGammaSign[i] * kGammaSign[j];
       const float* y = s.products[tri(kGammaColumn[i], kGammaColumn[j])];
 #pragma omp simd
       for (int l = 0; l < kLanes; ++l)
-        H[i][j][l] = sign * y[l];
+        H[i][j][l] = S[i][l] * (sign * y[l]) * S[j][l];
     }
     const float* y = s.products[tri(kGammaColumn[i], kColR)];
 #pragma omp simd
     for (int l = 0; l < kLanes; ++l) {
       H[i][i][l] *= 1.0 + damping[l];
-      delta[i][l] = -kGammaSign[i] * y[l];
+      delta[i][l] = -S[i][l] * (kGammaSign[i] * y[l]);
     }
   }
 #pragma omp simd
@@ -79,8 +88,10 @@ JPCR_SIMD_CLONES void lane_steps(const PixelLaneSums& s, const double damping[kP
 #pragma omp simd
   for (int l = 0; l < kLanes; ++l) {
     bool finite = good[l];
-    for (int i = 0; i < 6; ++i)
+    for (int i = 0; i < 6; ++i) {
+      delta[i][l] *= S[i][l];
       finite = finite && delta[i][l] - delta[i][l] == 0.0;
+    }
     ok[l] = finite;
   }
 }
@@ -163,8 +174,9 @@ JPCR_SIMD_CLONES void lane_updates(LaneQuadrics& q, const double delta[6][kLanes
 }  // namespace
 
 void pixel_lane_steps(const PixelLaneSums& sums, const double damping[kPixelLanes],
-                      double delta[6][kPixelLanes], bool ok[kPixelLanes]) {
-  lane_steps(sums, damping, delta, ok);
+                      const double range[kPixelLanes], double delta[6][kPixelLanes],
+                      bool ok[kPixelLanes]) {
+  lane_steps(sums, damping, range, delta, ok);
 }
 
 void pixel_lane_updates(LaneQuadrics& q, const double delta[6][kPixelLanes],

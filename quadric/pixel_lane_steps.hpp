@@ -19,11 +19,13 @@ struct LaneQuadrics {
 };
 
 /// Each lane's step (H + λ_l diag H) Δ = −g, with H = Σ w J Jᵀ and g = Σ w J r read off its
-/// sums (kGammaColumn, kGammaSign) and λ_l = damping[l], solved by LDLᵀ in double with
-/// cholesky_factor's pivot test. ok[l] is false where lane l's H is not numerically positive
-/// definite or Δ is not finite.
+/// sums (kGammaColumn, kGammaSign) and λ_l = damping[l], solved by LDLᵀ in double in the range
+/// units of range_unit_scales (range[l] = |p̄| of lane l, m) with cholesky_factor's pivot test, as
+/// solve_damped_step. ok[l] is false where lane l's H is not numerically positive definite or Δ
+/// is not finite.
 void pixel_lane_steps(const PixelLaneSums& sums, const double damping[kPixelLanes],
-                      double delta[6][kPixelLanes], bool ok[kPixelLanes]);
+                      const double range[kPixelLanes], double delta[6][kPixelLanes],
+                      bool ok[kPixelLanes]);
 
 /// γ ← γ ⊕ Δγ where take[l]: R ← exp([Δω₁, Δω₂, 0]×) R (Rodrigues: sin θ / θ and
 /// (1 − cos θ) / θ² from their series, exact in double, for θ ≤ 0.5 rad, from std::sin and

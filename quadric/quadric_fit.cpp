@@ -76,7 +76,7 @@ class PixelGroupFit {
       to_float();
       pixel_lane_sums(in_, planes_.at(0, u0, v), planes_.at(1, u0, v), planes_.at(2, u0, v),
                       offsets_.data(), static_cast<int>(offsets_.size()), !last, sums_);
-      if (!last) pixel_lane_steps(sums_, damping_, delta_, ok_);
+      if (!last) pixel_lane_steps(sums_, damping_, range_, delta_, ok_);
       for (int l = 0; l < kPixelLanes; ++l)
         decide(l, last);
       // Undone lanes return to their previous quadric; stepping lanes keep theirs as previous.
@@ -130,6 +130,7 @@ class PixelGroupFit {
       q_.row[i][l] = R(i / 3, i % 3);
     for (int i = LaneQuadrics::kTz; i < LaneQuadrics::kRows; ++i)
       q_.row[i][l] = 0.0;
+    range_[l] = active_[l] ? centre_range(centre) : 1.0;  // 1: any finite scale for an idle lane
     const SampleGate<double> limits = SampleGate<double>::at(p_, centre.cast<double>());
     for (int axis = 0; axis < 3; ++axis)
       in_.centre[axis][l] = centre(axis);
@@ -206,6 +207,7 @@ class PixelGroupFit {
   LaneQuadrics q_{}, previous_{};
   double previous_cost_[kPixelLanes];
   double damping_[kPixelLanes];   // λ of each lane's next step: p.damping, more after a retry
+  double range_[kPixelLanes];     // |p̄| of each lane (solve_damped_step's range units)
   double delta_[6][kPixelLanes];  // each lane's step (pixel_lane_steps)
   QuadricStatus status_[kPixelLanes];
   bool active_[kPixelLanes], ok_[kPixelLanes], undo_[kPixelLanes], take_[kPixelLanes],

@@ -125,20 +125,47 @@ JPCR_HD void accumulate_quadric_samples(const QuadricT<Scalar>& q, const VertexV
   }
 }
 
+/// The column scales of Quad IT's system in units of the centre's range d = |p̄| (lengths over
+/// d: Δω, Δt_z / d, Δκ · d), so that Δ = S Δ' with S = diag(1, 1, d, 1/d, 1/d, 1/d). In these
+/// units a scene scaled by s (d, ρ → s d, s ρ) gives the same system: the curvature columns, which
+/// grow as ρ² against the offset's 1, no longer fall below the singularity floor at near range.
+/// At d = 1 m S is the identity.
+JPCR_HD void range_unit_scales(double range, double S[6]) {
+  S[0] = S[1] = 1.0;
+  S[2] = range;
+  S[3] = S[4] = S[5] = 1.0 / range;
+}
+
 /// Solves the damped system (H + λ diag H) Δ = −g in double (method.md §10: the step carries the
-/// minus sign the paper drops). Returns false when it is singular or not finite.
+/// minus sign the paper drops), as S H S + λ diag(S H S)) Δ' = −S g, Δ = S Δ' in the range units
+/// of range_unit_scales (the same step: the damping on the diagonal is invariant to column
+/// scales). Returns false when it is singular (cholesky_factor's floor, relative to the largest
+/// diagonal in range units: the same test at every scale of the scene) or not finite.
 template <typename Scalar>
-JPCR_HD bool solve_damped_step(const NormalEquations6<Scalar>& ne, double damping,
+JPCR_HD bool solve_damped_step(const NormalEquations6<Scalar>& ne, double damping, double range,
                                Eigen::Matrix<double, 6, 1>& delta) {
-  Eigen::Matrix<double, 6, 6> H = ne.H.template cast<double>();
-  for (int i = 0; i < 6; ++i)
+  double S[6];
+  range_unit_scales(range, S);
+  Eigen::Matrix<double, 6, 6> H;
+  for (int i = 0; i < 6; ++i) {
+    for (int j = 0; j <= i; ++j)
+      H(i, j) = S[i] * double(ne.H(i, j)) * S[j];
     H(i, i) *= 1.0 + damping;
+    delta(i) = -S[i] * double(ne.g(i));
+  }
   if (!cholesky_factor<double, 6>(H)) return false;
-  delta = -ne.g.template cast<double>();
   cholesky_solve<double, 6>(H, delta);
-  for (int i = 0; i < 6; ++i)
+  for (int i = 0; i < 6; ++i) {
+    delta(i) *= S[i];
     if (!(delta(i) - delta(i) == 0.0)) return false;
+  }
   return true;
+}
+
+/// |p̄| in double, the same in the per-pixel and the lane-parallel fit.
+JPCR_HD double centre_range(const Eigen::Vector3f& centre) {
+  const double x = centre.x(), y = centre.y(), z = centre.z();
+  return std::sqrt(x * x + y * y + z * z);
 }
 
 /// The early stop of Quad IT: every part of the step below its tolerance.
@@ -173,6 +200,7 @@ JPCR_HD QuadricStatus fit_quadric_pixel(const VertexView& vertices, const PixelO
   q.R = local_frame<Scalar>(normal.template cast<Scalar>().normalized());
   q.center = centre.template cast<Scalar>();
   q.t_z = q.a = q.b = q.c = Scalar(0);
+  const double range = centre_range(centre);
   QuadricT<Scalar> previous = q;
   double previous_cost = 1e300;
   double damping = p.damping;
@@ -199,7 +227,7 @@ JPCR_HD QuadricStatus fit_quadric_pixel(const VertexView& vertices, const PixelO
     previous = q;
     previous_cost = cost;
     Eigen::Matrix<double, 6, 1> delta;
-    if (!solve_damped_step(ne, damping, delta)) return QuadricStatus::kSingular;
+    if (!solve_damped_step(ne, damping, range, delta)) return QuadricStatus::kSingular;
     apply_quadric_update(q, QuadricVector<Scalar>(delta.template cast<Scalar>()));
     stepped = true;
     if (step_converged(delta, p)) {

@@ -51,12 +51,15 @@ TEST(PixelLaneSteps, EqualSolveDampedStepAndFlagSingularLanes) {
   double delta[6][kPixelLanes];
   bool ok[kPixelLanes];
   double damping[kPixelLanes];  // each lane its own, as after Quad IT's retries
-  for (int l = 0; l < kPixelLanes; ++l)
+  double range[kPixelLanes];    // and its own centre range, 5 cm to 8 m
+  for (int l = 0; l < kPixelLanes; ++l) {
     damping[l] = l % 3 == 0 ? 0.01 : l % 3 == 1 ? 0.1 : 1.0;
-  pixel_lane_steps(sums, damping, delta, ok);
+    range[l] = 0.05 * std::pow(2.0, 0.5 * l);
+  }
+  pixel_lane_steps(sums, damping, range, delta, ok);
   for (int l = 0; l < kPixelLanes; ++l) {
     Eigen::Matrix<double, 6, 1> expected;
-    const bool solved = solve_damped_step(ne[l], damping[l], expected);
+    const bool solved = solve_damped_step(ne[l], damping[l], range[l], expected);
     EXPECT_EQ(ok[l], solved) << "lane " << l;
     EXPECT_EQ(ok[l], l != 3 && l != 5) << "lane " << l;
     if (!solved) continue;
