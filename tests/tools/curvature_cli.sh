@@ -128,6 +128,9 @@ d[start:start + 8 * 100] = struct.pack("<f", float("inf")) * 200  # 100 pixels o
 open(sys.argv[2], "wb").write(d)
 PY
 expect 0 "warning: 100 pixels of .*inf are +-Inf" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/inf"
+# A map whose stamp has no ground truth is not compared, and said so.
+cp "$tmp/inf/curvature/0.000000.npy" "$tmp/inf/curvature/99.000000.npy"
+expect 0 "warning: 1 of 2 maps of .*inf have no ground truth of their stamp" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/inf"
 # jpcr_eval's report never replaces what it reads, nor the results it scores.
 expect 1 "summary.json: is a file of --est" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/it" \
   --out "$tmp/it/summary.json"

@@ -27,6 +27,13 @@ expect 2 "unknown option --bogus" -- "$eval_bin" traj --bogus
 expect 2 "unknown command" -- "$eval_bin" frobnicate
 expect 2 "--noise: noise 'bogus'" -- "$eval_bin" noise --noise bogus
 expect 0 "usage: jpcr_eval traj" -- "$eval_bin" traj --help
+# Ground truth at 10 Hz, the estimate at 30 Hz: a third of it is evaluated (said), and no two
+# consecutive estimated poses both have ground truth, so the relative errors are n/a (null), not 0.
+for i in $(seq 0 30); do echo "$(awk "BEGIN{print $i/10}") 0.$i 0 0 0 0 0 1"; done > "$tmp/gt10hz.txt"
+for i in $(seq 0 89); do echo "$(awk "BEGIN{printf \"%.6f\", $i/30}") 0.$i 0 0 0 0 0 1"; done > "$tmp/est30hz.txt"
+expect 0 "warning: only 30 of 90 estimated poses have ground truth" -- "$eval_bin" traj --gt "$tmp/gt10hz.txt" --est "$tmp/est30hz.txt"
+expect 0 "relative (paper Tables I-III) n/a (no two consecutive" -- "$eval_bin" traj --gt "$tmp/gt10hz.txt" --est "$tmp/est30hz.txt"
+expect 0 '"relative": null' -- "$eval_bin" traj --gt "$tmp/gt10hz.txt" --est "$tmp/est30hz.txt" --json
 # --baseline: a second estimate compared pair by pair; bad ones are named.
 expect 1 "missing.txt: file does not exist" -- "$eval_bin" traj --gt "$tmp/gt.txt" --est "$tmp/gt.txt" --baseline "$tmp/missing.txt"
 expect 1 "gt.txt: only 3 frame pairs are common to the estimate and the baseline (need 10)" -- \

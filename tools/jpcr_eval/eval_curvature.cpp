@@ -107,8 +107,12 @@ int run_curvature(int argc, char** argv) {
     std::optional<CurvatureErrorAccumulator> acc;
     std::size_t infinite = 0;   // estimate pixels at ±Inf: counted as missing, and said so
     std::size_t unordered = 0;  // κ1 < κ2: another convention (swapped channels, flipped sign)
+    std::size_t unmatched = 0;  // estimated maps whose stamp has no ground truth: not compared
     for (const std::string& stamp : est) {
-      if (!gt.count(stamp)) continue;
+      if (!gt.count(stamp)) {
+        ++unmatched;
+        continue;
+      }
       const std::string name = "curvature/" + stamp + ".npy";
       const CurvatureImage truth = read_curvature_npy((fs::path(args.get("gt")) / name).string());
       if (!acc) acc.emplace(support_radius(support, truth.width()));
@@ -126,6 +130,10 @@ int run_curvature(int argc, char** argv) {
         throw InputError(est_file + ": " + what);
       }
     }
+    if (unmatched > 0)
+      std::cerr << "jpcr_eval curvature: warning: " << unmatched << " of " << est.size()
+                << " maps of " << args.get("est") << " have no ground truth of their stamp in "
+                << args.get("gt") << "; they are not compared\n";
     if (infinite > 0)
       std::cerr << "jpcr_eval curvature: warning: " << infinite << " pixels of " << args.get("est")
                 << " are +-Inf; they count as missing (a map marks invalid pixels with NaN)\n";

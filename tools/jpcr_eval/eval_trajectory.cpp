@@ -30,6 +30,13 @@ struct TrajectoryReport {
   std::optional<PairedComparison> baseline;  // --baseline: est against it, per frame pair
 };
 
+constexpr const char* kNoRelativePairs =
+    "no two consecutive estimated poses both have ground truth within --max-difference";
+
+double associated_fraction(const TrajectoryReport& r) {
+  return static_cast<double>(r.ate.translation.count) / static_cast<double>(r.est_poses);
+}
+
 void write_statistics(JsonWriter& json, const char* name, const ErrorStatistics& s) {
   json.key(name).begin_object();
   json.field("rmse", s.rmse).field("mean", s.mean).field("median", s.median);
@@ -41,6 +48,10 @@ void write_json(std::ostream& out, const TrajectoryReport& r) {
   JsonWriter json(out);
   json.begin_object();
   json.field("gt_poses", r.gt_poses).field("est_poses", r.est_poses);
+  // How much of the estimate the errors describe: its poses with ground truth within
+  // --max-difference (the ATE's pairs).
+  json.field("associated_poses", r.ate.translation.count)
+      .field("associated_fraction", associated_fraction(r));
   json.key("ate");
   json.begin_object();
   write_statistics(json, "translation_m", r.ate.translation);
@@ -59,11 +70,17 @@ void write_json(std::ostream& out, const TrajectoryReport& r) {
     json.null();
     json.field("rpe_per_second_missing", r.rpe_second_missing);
   }
-  json.key("relative").begin_object();
-  json.field("translation_rms_m", r.relative.translation_rms);
-  json.field("rotation_rms_rad", r.relative.rotation_rms);
-  json.field("pairs", r.relative.pairs);
-  json.end_object();
+  json.key("relative");
+  if (r.relative.pairs > 0) {
+    json.begin_object();
+    json.field("translation_rms_m", r.relative.translation_rms);
+    json.field("rotation_rms_rad", r.relative.rotation_rms);
+    json.field("pairs", r.relative.pairs);
+    json.end_object();
+  } else {  // 0 is a perfect score, not "not computed"
+    json.null();
+    json.field("relative_missing", std::string(kNoRelativePairs));
+  }
   json.key("drift").begin_object();
   json.field("distance_m", r.drift.distance.empty() ? 0.0 : r.drift.distance.back());
   json.field("final_translation_m", r.drift.translation.empty() ? 0.0 : r.drift.translation.back());
@@ -91,8 +108,9 @@ void write_json(std::ostream& out, const TrajectoryReport& r) {
 
 void write_text(std::ostream& out, const TrajectoryReport& r) {
   char line[256];
-  std::snprintf(line, sizeof(line), "poses: %zu ground truth, %zu estimated\n", r.gt_poses,
-                r.est_poses);
+  std::snprintf(line, sizeof(line),
+                "poses: %zu ground truth, %zu estimated, %zu of them with ground truth (%.1f %%)\n",
+                r.gt_poses, r.est_poses, r.ate.translation.count, 100.0 * associated_fraction(r));
   out << line;
   const ErrorStatistics& a = r.ate.translation;
   std::snprintf(line, sizeof(line),
@@ -112,10 +130,15 @@ void write_text(std::ostream& out, const TrajectoryReport& r) {
   } else {
     out << "RPE per second n/a (" << r.rpe_second_missing << ")\n";
   }
-  std::snprintf(line, sizeof(line),
-                "relative (paper Tables I-III) translation %.3e m  rotation %.3e rad (%zu pairs)\n",
-                r.relative.translation_rms, r.relative.rotation_rms, r.relative.pairs);
-  out << line;
+  if (r.relative.pairs > 0) {
+    std::snprintf(
+        line, sizeof(line),
+        "relative (paper Tables I-III) translation %.3e m  rotation %.3e rad (%zu pairs)\n",
+        r.relative.translation_rms, r.relative.rotation_rms, r.relative.pairs);
+    out << line;
+  } else {
+    out << "relative (paper Tables I-III) n/a (" << kNoRelativePairs << ")\n";
+  }
   if (!r.drift.distance.empty()) {
     std::snprintf(
         line, sizeof(line),
@@ -154,13 +177,22 @@ int run_trajectory(int argc, char** argv) {
               "a second estimate of the same frames (TUM format), e.g. ICP-ftf's: est's "
               "relative errors are compared with its on the frame pairs both have, with a 95 % "
               "interval of the ratio (better / worse / indistinguishable)")
-      .option("max-difference", "timestamp association window in seconds", "0.02")
+      .option("max-difference",
+              "timestamp association window in seconds (ATE, relative errors, drift; RPE pairs "
+              "with ground truth as TUM's evaluate_rpe.py: within twice its median interval)",
+              "0.02")
       .option("out", "also write the JSON report to this file")
       .flag("json", "print JSON instead of text")
       .epilog(
           "examples:\n  jpcr_eval traj --gt data/groundtruth.txt --est out/trajectory.txt --json\n"
           "  jpcr_eval traj --gt data/groundtruth.txt --est out/trajectory.txt \\\n"
-          "      --baseline out/front_end.txt     # the pipeline against its ICP-ftf front end");
+          "      --baseline out/front_end.txt     # the pipeline against its ICP-ftf front end\n"
+          "\n"
+          "Files: one pose per line, fields separated by spaces or tabs, timestamps strictly\n"
+          "increasing; '#' starts a comment. RPE per second follows evaluate_rpe.py: each\n"
+          "pose is paired with the first one at least 1 s later, so across a gap in the\n"
+          "estimate a pair can span more (or, at the end, less) than 1 s. A warning says when\n"
+          "fewer than 90 % of the estimated poses have ground truth.");
   return cli::run_program("jpcr_eval traj", [&] {
     if (!args.parse(argc, argv)) return 0;
     const double max_difference = args.get_double("max-difference");
@@ -190,7 +222,11 @@ int run_trajectory(int argc, char** argv) {
     if (!std::isfinite(report.ate.translation.rmse) || !std::isfinite(report.ate.translation.max))
       throw InputError(args.get("est") + ": the errors against " + args.get("gt") +
                        " are not finite (positions too large to align?)");
-    report.rpe_frame = compute_rpe(gt, est, 1.0, DeltaUnit::kFrames);
+    try {
+      report.rpe_frame = compute_rpe(gt, est, 1.0, DeltaUnit::kFrames);
+    } catch (const InputError& e) {
+      throw InputError(args.get("est") + " against " + args.get("gt") + ": " + e.what());
+    }
     if (est.back().timestamp - est.front().timestamp > 1.0) {
       try {
         report.rpe_second = compute_rpe(gt, est, 1.0, DeltaUnit::kSeconds);
@@ -208,9 +244,16 @@ int run_trajectory(int argc, char** argv) {
         report.baseline = compare_relative_errors(
             report.relative, compute_relative_errors(gt, base, max_difference));
       } catch (const InputError& e) {
-        throw InputError(args.get("baseline") + ": " + e.what());
+        throw InputError(args.get("est") + " and the baseline " + args.get("baseline") + ": " +
+                         e.what());
       }
     }
+    if (associated_fraction(report) < 0.9)
+      std::cerr << "jpcr_eval traj: warning: only " << report.ate.translation.count << " of "
+                << report.est_poses << " estimated poses have ground truth within "
+                << max_difference << " s; the errors describe those alone\n";
+    if (report.relative.pairs == 0)
+      std::cerr << "jpcr_eval traj: warning: relative errors n/a: " << kNoRelativePairs << "\n";
 
     if (args.has("out")) {
       ensure_parent_directory(args.get("out"));
