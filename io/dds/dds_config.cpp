@@ -9,12 +9,10 @@
 
 namespace jpcr {
 
-namespace {
-
 // A DDS topic name as ROS 2 maps one: "rt/" + the ROS name without its leading slash, made of
 // letters, digits, '_' and '/' (what Cyclone accepts: it refuses '.', '-' or a leading digit with
 // "Bad Parameter"). A ROS name such as /camera/depth would match nothing, silently.
-void check_topic(const std::string& field, const std::string& name) {
+void check_topic_name(const std::string& field, const std::string& name) {
   if (name.empty()) throw InputError(field + ": must not be empty");
   if (name.front() == '/') {
     throw InputError(field + ": '" + name + "' is a ROS name; its DDS topic is 'rt" + name + "'");
@@ -32,13 +30,11 @@ void check_topic(const std::string& field, const std::string& name) {
   if (name.find("//") != std::string::npos) throw InputError(field + ": '" + name + "' holds '//'");
 }
 
-}  // namespace
-
 void DdsConfig::validate() const {
   if (domain_id < 0 || domain_id > 232) throw InputError("domain_id: must be in 0..232");
-  check_topic("topic_prefix", topic_prefix);
-  check_topic("depth_topic", depth_topic);
-  check_topic("camera_info_topic", camera_info_topic);
+  check_topic_name("topic_prefix", topic_prefix);
+  check_topic_name("depth_topic", depth_topic);
+  check_topic_name("camera_info_topic", camera_info_topic);
   if (depth_topic.back() == '/' || camera_info_topic.back() == '/')
     throw InputError(std::string(depth_topic.back() == '/' ? "depth_topic" : "camera_info_topic") +
                      ": must not end with '/'");

@@ -54,6 +54,11 @@ struct DdsConfig {
   DdsQos camera_info_qos() const { return DdsQos{input_reliable, false, history_depth}; }
 };
 
+/// Throws InputError "FIELD: ..." unless `name` is a DDS topic name as ROS 2 maps one ("rt/" +
+/// the ROS name without its leading slash: letters, digits, '_' and '/', no leading digit, no
+/// "//"); a ROS name such as /camera/depth is named as such.
+void check_topic_name(const std::string& field, const std::string& name);
+
 /// Reads a `dds:` section onto `config` (absent keys keep their value) and validates it.
 void read_dds_config(YamlSection yaml, DdsConfig& config);
 

@@ -35,9 +35,11 @@ bool DdsDepthPublisher::flush(std::chrono::milliseconds timeout) const {
   return writers_->camera_info.wait_for_acks(timeout) && writers_->depth.wait_for_acks(timeout);
 }
 
-bool DdsDepthPublisher::wait_for_subscribers(int count, std::chrono::milliseconds timeout) const {
-  return writers_->depth.wait_matched(count, timeout) &&
-         writers_->camera_info.wait_matched(count, timeout);
+bool DdsDepthPublisher::wait_for_subscribers(int count, std::chrono::milliseconds timeout,
+                                             const std::function<bool()>& keep_waiting) const {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;  // one for both topics
+  return writers_->depth.wait_matched(count, deadline, keep_waiting) &&
+         writers_->camera_info.wait_matched(count, deadline, keep_waiting);
 }
 
 }  // namespace jpcr

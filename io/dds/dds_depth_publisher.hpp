@@ -4,6 +4,7 @@
 #pragma once
 
 #include <chrono>
+#include <functional>
 #include <memory>
 
 #include "jpcr/io/dds/dds_config.hpp"
@@ -26,8 +27,10 @@ class DdsDepthPublisher {
   int matched() const;
   /// Waits until reliable subscribers acknowledged every frame (call before exiting).
   bool flush(std::chrono::milliseconds timeout) const;
-  /// Waits until `count` depth subscribers are matched; false on timeout.
-  bool wait_for_subscribers(int count, std::chrono::milliseconds timeout) const;
+  /// Waits until `count` subscribers are matched on both the depth and the camera_info topic,
+  /// `timeout` in all; false on timeout, or as soon as keep_waiting (when given) says no.
+  bool wait_for_subscribers(int count, std::chrono::milliseconds timeout,
+                            const std::function<bool()>& keep_waiting = {}) const;
 
  private:
   struct Writers;

@@ -64,6 +64,14 @@ struct DdsDepthSubscriber::State {
   // Cyclone's receive thread: take at once, so that the reader's history never overflows.
   static void on_depth(dds_entity_t reader, void* arg) {
     State& s = *static_cast<State*>(arg);
+    try {
+      take_depth(reader, s);
+    } catch (...) {  // bad_alloc in the queue, a failed lock: nothing may leave Cyclone's thread
+      s.lost_in_listener.fetch_add(1);
+    }
+  }
+
+  static void take_depth(dds_entity_t reader, State& s) {
     take_samples<RosImage>(reader, [&](const RosImage& m) {
       ReceivedImage r;
       const RosImageView view = image_view_of(m);
@@ -94,6 +102,14 @@ struct DdsDepthSubscriber::State {
 
   static void on_camera_info(dds_entity_t reader, void* arg) {
     State& s = *static_cast<State*>(arg);
+    try {
+      take_cameras(reader, s);
+    } catch (...) {  // as on_depth
+      s.lost_in_listener.fetch_add(1);
+    }
+  }
+
+  static void take_cameras(dds_entity_t reader, State& s) {
     take_samples<RosCameraInfoMsg>(reader, [&](const RosCameraInfoMsg& m) {
       ReceivedCamera r;
       try {
@@ -140,6 +156,7 @@ struct DdsDepthSubscriber::State {
   std::deque<ReceivedCamera> cameras;
   static constexpr std::size_t kCameraQueue = 8;
   std::size_t dropped = 0;
+  std::atomic<std::size_t> lost_in_listener{0};  // takes that threw (counted as dropped)
   // The caller's thread only.
   std::optional<CameraIntrinsics> camera;
   std::deque<Frame> frames;
@@ -172,7 +189,7 @@ int DdsDepthSubscriber::matched() const {
 
 std::size_t DdsDepthSubscriber::frames_dropped() const {
   const std::lock_guard<std::mutex> lock(state_->mutex);
-  return state_->dropped + lost_;
+  return state_->dropped + state_->lost_in_listener.load() + lost_;
 }
 
 namespace {

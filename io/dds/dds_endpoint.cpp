@@ -123,10 +123,11 @@ int DdsEndpoint::matched_readers_with(const std::string& user_data) const {
   return count;
 }
 
-bool DdsEndpoint::wait_matched(int count, std::chrono::milliseconds timeout) const {
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
+bool DdsEndpoint::wait_matched(int count, std::chrono::steady_clock::time_point deadline,
+                               const std::function<bool()>& keep_waiting) const {
   while (matched() < count) {
     if (std::chrono::steady_clock::now() >= deadline) return false;
+    if (keep_waiting && !keep_waiting()) return false;
     std::this_thread::sleep_for(kMatchPollInterval);
   }
   return true;

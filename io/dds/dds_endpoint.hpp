@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <functional>
 #include <string>
 #include <utility>
 
@@ -53,8 +54,13 @@ class DdsEndpoint {
   int matched() const;
   /// A writer: its matched readers whose USER_DATA (DdsQos::user_data) is `user_data`.
   int matched_readers_with(const std::string& user_data) const;
-  /// Waits until at least `count` endpoints are matched; false on timeout.
-  bool wait_matched(int count, std::chrono::milliseconds timeout) const;
+  /// Waits until at least `count` endpoints are matched by `deadline`; false on timeout, or as
+  /// soon as keep_waiting (when given, e.g. "no stop signal yet") says no.
+  bool wait_matched(int count, std::chrono::steady_clock::time_point deadline,
+                    const std::function<bool()>& keep_waiting = {}) const;
+  bool wait_matched(int count, std::chrono::milliseconds timeout) const {
+    return wait_matched(count, std::chrono::steady_clock::now() + timeout);
+  }
   /// A writer: waits until matched reliable readers acknowledged every sample; false on timeout.
   bool wait_for_acks(std::chrono::milliseconds timeout) const;
 

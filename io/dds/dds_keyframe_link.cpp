@@ -116,7 +116,10 @@ void DdsKeyframeReader::poll() {
       received_.push_back(decode_keyframe(m, limits_));
     } catch (const InputError& e) {
       ++rejected_;
-      *log_ << "jpcr dds: " << topic_ << ": rejected sample: " << e.what() << std::endl;
+      std::size_t left_out = 0;  // a broken front end must not flood the log
+      if (reject_lines_.allow(left_out))
+        *log_ << "jpcr dds: " << topic_ << ": rejected sample: " << e.what()
+              << LogBudget::note(left_out) << std::endl;
     }
   });
 }

@@ -35,6 +35,7 @@
 #include "jpcr/io/dds/dds_config.hpp"
 #include "jpcr/io/dds/dds_participant.hpp"
 #include "jpcr/io/dds/ros_messages.hpp"
+#include "jpcr/io/log_budget.hpp"
 
 namespace jpcr {
 
@@ -116,6 +117,7 @@ class DdsKeyframeReader {
   std::ostream* log_;
   DdsReader<RosKeyframe> reader_;
   std::deque<DecodedKeyframe> received_;
+  LogBudget reject_lines_;
   std::size_t rejected_ = 0;
 };
 

@@ -1,5 +1,6 @@
 #include "jpcr/io/dds/dds_participant.hpp"
 
+#include <iostream>
 #include <map>
 #include <mutex>
 
@@ -53,7 +54,12 @@ DdsParticipant::DdsParticipant(int domain_id, const std::string& cyclone_uri)
       if (domain >= 0) {
         registry.domains[domain_id] = {domain, 1};
         counted_domain_ = true;
-      } else if (domain != DDS_RETCODE_PRECONDITION_NOT_MET) {  // exists: joined implicitly
+      } else if (domain == DDS_RETCODE_PRECONDITION_NOT_MET) {  // exists: joined implicitly
+        // (e.g. a ROS 2 node of this process with rmw_cyclonedds): its configuration holds.
+        std::cerr << "jpcr dds: domain " << domain_id
+                  << " already exists in this process; its Cyclone configuration holds and "
+                     "cyclone_uri is not applied (MaxSampleSize, socket buffers)\n";
+      } else {
         check_dds(domain,
                   "dds_create_domain(" + std::to_string(domain_id) + ", " + cyclone_uri + ")");
       }

@@ -44,6 +44,19 @@ else
   echo "ok: SIGINT stops jpcr_dds_play: $(tail -1 "$tmp/slow.txt")"
 fi
 
+# SIGINT also ends the wait for subscribers (none here): it ran the whole --wait-subscribers.
+"$play" --dataset "$tum" --config "$cam" --domain $domain --wait-subscribers 60 \
+  > "$tmp/waiting.txt" 2>&1 &
+waiting=$!
+for ((i = 0; i < 300; ++i)); do grep -q "^jpcr_dds_play: " "$tmp/waiting.txt" && break; sleep 0.1; done
+sleep 0.5; start=$SECONDS; kill -INT $waiting; wait $waiting; rc=$?
+if [ "$rc" != 0 ] || [ $((SECONDS - start)) -gt 10 ] || grep -q "publishing anyway" "$tmp/waiting.txt"; then
+  echo "FAIL: SIGINT while waiting for subscribers: exit $rc after $((SECONDS - start)) s"
+  cat "$tmp/waiting.txt"; fail=1
+else
+  echo "ok: SIGINT ends the wait for subscribers: $(tail -1 "$tmp/waiting.txt")"
+fi
+
 # Nothing published: the wait is bounded and fewer samples than --count is an error.
 expect 1 "received 0 of 1 samples on rt/jpcr/odom within 0.5 s" -- \
   "$echo_bin" rt/jpcr/odom --domain $domain --count 1 --timeout 0.5
@@ -64,7 +77,8 @@ expect 2 "rate must be in 0.001..1e6" -- "$play" --dataset "$tum" --rate 0
 expect 2 "rate must be in 0.001..1e6" -- "$play" --dataset "$tum" --rate 1e-12
 expect 2 "wait-subscribers must be 0..86400" -- "$play" --dataset "$tum" --wait-subscribers 1e10
 expect 2 "domain must be in 0..232" -- "$echo_bin" rt/x --domain 300
-expect 2 "TOPIC '/jpcr/odom' is a ROS name; its DDS topic is 'rt/jpcr/odom'" -- "$echo_bin" /jpcr/odom
+expect 2 "TOPIC: '/jpcr/odom' is a ROS name; its DDS topic is 'rt/jpcr/odom'" -- "$echo_bin" /jpcr/odom
+expect 2 "TOPIC: 'rt/jpcr/od-om' holds a character other than" -- "$echo_bin" rt/jpcr/od-om
 expect 2 "TOPIC needs a non-empty value" -- "$echo_bin" ""
 expect 2 "type must be odom, pose, path, image, camera_info or keyframe, got 'twist'" -- \
   "$echo_bin" rt/x --type twist

@@ -80,10 +80,13 @@ expect_node $idle_pid 60 "$tmp/idle.txt" "processed 2 frames.*skipped 2 frames.*
   "idle timeout, repeated frames skipped"
 n=$(grep -c "skipped an input: frame stamped .* is not after the previous frame" "$tmp/idle.txt")
 [ "$n" = 2 ] || { echo "FAIL: $n out-of-order lines, want 2"; cat "$tmp/idle.txt"; fail=1; }
-# A step back of more than a second is a new time line (a restarted recording): taken, said once.
+# A step back of more than a second is a new time line (a restarted recording) once 3 frames in
+# a row continue it: taken, said once. A single stale frame is skipped (it was taken, and the
+# path went back in time), as is a repeated one. Stamps 0, 2, 4, 6, 8 s; played: 8, then 2
+# (stale), 8 (repeated), then 0, 2, 4 (the new line, taken at 4).
 # The camera here names its own frame: odom's child frame is the depth's header.frame_id.
 printf 'synthetic:\n  trajectory:\n    rate: 0.5\n' > "$tmp/slow.yaml"
-expect 0 "wrote 2 frames" -- "$synth" --scene room_spheres --frames 2 --size 160x120 --seed 4 \
+expect 0 "wrote 5 frames" -- "$synth" --scene room_spheres --frames 5 --size 160x120 --seed 4 \
   --params "$tmp/slow.yaml" --out "$tmp/slow"
 cp "$tmp/dds.yaml" "$tmp/robot1.yaml"
 printf '  camera_frame_id: robot1/depth_optical\n' >> "$tmp/robot1.yaml"
@@ -91,15 +94,17 @@ printf '  camera_frame_id: robot1/depth_optical\n' >> "$tmp/robot1.yaml"
 reset_echo=$!; pids+=($reset_echo)
 "$node" "${dds[@]}" --method icp-ftf --idle-timeout 6 > "$tmp/reset.txt" 2>&1 &
 reset_pid=$!; pids+=($reset_pid)
-for frames in 1:2 0:1; do
-  expect 0 "published 1 frames" -- "$play" --dataset "$tmp/slow" --encoding 32FC1 \
-    --frames $frames --as-fast-as-possible --wait-subscribers 15 --params "$tmp/robot1.yaml" \
+for frames in 4:5/1 1:2/1 4:5/1 0:3/3; do
+  expect 0 "published ${frames#*/} frames" -- "$play" --dataset "$tmp/slow" --encoding 32FC1 \
+    --frames "${frames%/*}" --as-fast-as-possible --wait-subscribers 15 --params "$tmp/robot1.yaml" \
     --domain $domain
 done
-expect_node $reset_pid 60 "$tmp/reset.txt" "processed 2 frames.*skipped 0 frames" \
-  "a new time line is taken"
-grep -q "the stamps went back by 2 s .*taken as a new time line" "$tmp/reset.txt" ||
+expect_node $reset_pid 60 "$tmp/reset.txt" "processed 2 frames.*skipped 4 frames" \
+  "a new time line is taken, a stale frame is not"
+grep -q "the stamps went back by 4 s .*for 3 frames in a row.*taken as a new time line" "$tmp/reset.txt" ||
   { echo "FAIL: no line about the new time line"; cat "$tmp/reset.txt"; fail=1; }
+n=$(grep -c "taken as a new time line" "$tmp/reset.txt")
+[ "$n" = 1 ] || { echo "FAIL: $n new time lines, want 1"; cat "$tmp/reset.txt"; fail=1; }
 wait_bounded $reset_echo 30
 n=$(grep -c "^odom .* child=robot1/depth_optical" "$tmp/reset_odom.txt")
 [ "$n" = 2 ] || { echo "FAIL: $n of 2 odom in the camera's frame"; cat "$tmp/reset_odom.txt"; fail=1; }
@@ -134,6 +139,8 @@ expect 2 "--window must be in" -- "$node" --window 1
 expect 2 "--max-frames must be >= 0" -- "$node" --max-frames -1
 expect 2 "--max-frames is the front end's" -- "$node" --role backend --max-frames 5
 expect 2 "--idle-timeout must be >= 0" -- "$node" --idle-timeout -1
+expect 2 "--flush-timeout must be 0..86400 s" -- "$node" --flush-timeout inf
+expect 2 "--backend-wait must be 0..86400 s" -- "$node" --backend-wait 1e300
 expect 2 "domain must be in 0..232" -- "$node" --domain 300
 printf 'pipeline:\n  window: 99\n' > "$tmp/bad.yaml"
 expect 1 "error: .*window" -- "$node" --params "$tmp/bad.yaml"

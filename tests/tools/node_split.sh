@@ -189,5 +189,5 @@ for victim in back front; do
 done
 
 expect 2 "--role must be all, frontend or backend, got 'middle'" -- "$node" --role middle
-expect 2 "--backend-wait must be >= 0" -- "$node" --role frontend --backend-wait -1
+expect 2 "--backend-wait must be 0..86400 s" -- "$node" --role frontend --backend-wait -1
 exit ${fail:-0}

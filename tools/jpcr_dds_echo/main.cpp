@@ -10,8 +10,10 @@
 #include "cli/arguments.hpp"
 #include "cli/dds_options.hpp"
 #include "cli/stop_signal.hpp"
+#include "jpcr/io/dds/dds_config.hpp"
 #include "jpcr/io/dds/ros_messages.hpp"
 #include "jpcr/io/tum_lists.hpp"
+#include "jpcr/quadric/error.hpp"
 #include "jpcr_dds_echo/message_summary.hpp"
 
 namespace jpcr {
@@ -105,9 +107,11 @@ int run(int argc, char** argv) {
     if (!args.parse(argc, argv)) return 0;
     EchoOptions o;
     o.topic = args.get("TOPIC");
-    if (o.topic.front() == '/')  // a ROS name matches no DDS topic
-      throw cli::UsageError("TOPIC '" + o.topic + "' is a ROS name; its DDS topic is 'rt" +
-                            o.topic + "'");
+    try {  // Cyclone says only "Bad Parameter"; a ROS name would match no DDS topic
+      check_topic_name("TOPIC", o.topic);
+    } catch (const InputError& e) {
+      throw cli::UsageError(e.what());
+    }
     const std::string type = args.has("type") ? args.get("type") : type_of_topic(o.topic);
     if (std::find(kTypes.begin(), kTypes.end(), type) == kTypes.end()) {
       throw cli::UsageError(

@@ -96,7 +96,8 @@ int run(int argc, char** argv) {
               << last - 1 << " as " << to_string(encoding) << " on " << dds.depth_topic
               << " (domain " << dds.domain_id << ")\n";
     const auto wait = std::chrono::milliseconds(static_cast<long long>(wait_seconds * 1000.0));
-    if (!publisher.wait_for_subscribers(1, wait) && wait_seconds > 0.0) {
+    if (!publisher.wait_for_subscribers(1, wait, [] { return !cli::stop_requested(); }) &&
+        wait_seconds > 0.0 && !cli::stop_requested()) {
       std::cerr << "jpcr_dds_play: no subscriber of both " << dds.depth_topic << " and "
                 << dds.camera_info_topic << " after " << wait_seconds << " s; publishing anyway\n";
     }

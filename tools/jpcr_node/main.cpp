@@ -376,11 +376,14 @@ int node_main(int argc, char** argv) {
           "stream (give it to --role frontend)");
     o.stop.idle_timeout = args.get_double("idle-timeout");
     if (!(o.stop.idle_timeout >= 0.0)) throw cli::UsageError("--idle-timeout must be >= 0");
+    // Bounded so that they fit the clock's milliseconds (inf became a negative wait: none).
     const double flush_timeout = args.get_double("flush-timeout");
-    if (!(flush_timeout >= 0.0)) throw cli::UsageError("--flush-timeout must be >= 0");
+    if (!(flush_timeout >= 0.0 && flush_timeout <= 86400.0))
+      throw cli::UsageError("--flush-timeout must be 0..86400 s");
     o.flush_timeout = milliseconds_of(flush_timeout);
     const double backend_wait = args.get_double("backend-wait");
-    if (!(backend_wait >= 0.0)) throw cli::UsageError("--backend-wait must be >= 0");
+    if (!(backend_wait >= 0.0 && backend_wait <= 86400.0))
+      throw cli::UsageError("--backend-wait must be 0..86400 s");
     o.backend_wait = milliseconds_of(backend_wait);
     o.pipeline.validate();
     o.dds = cli::dds_config_from(args);

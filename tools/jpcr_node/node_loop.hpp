@@ -55,21 +55,37 @@ inline std::string rate_summary(const Outcome& o, const char* inputs) {
 
 /// Live frames must come in time order: a frame stamped at or up to kMaxStepBack before the last
 /// one taken (a second publisher, a repeated sample) would be tracked as a motion back in time.
-/// A larger step back is a new time line (a restarted recording, a reset clock): taken, with one
-/// line, so that the node does not skip every later frame.
+/// A larger step back is a new time line (a restarted recording, a reset clock) once
+/// kConfirmFrames frames in a row, in order, continue it: taken, with one line, so that the node
+/// does not skip every later frame. A single delayed frame, or a second publisher whose clock is
+/// behind between frames of the first, is skipped (each of them was a new time line before, and
+/// the path went back and forth in time).
 class StampOrder {
  public:
   static constexpr double kMaxStepBack = 1.0;  // s
+  static constexpr int kConfirmFrames = 3;
 
   /// Throws InputError (the input is skipped) when `stamp` is out of order.
   void take(double stamp) {
     if (taken_ && !(stamp > last_)) {
-      if (last_ - stamp <= kMaxStepBack)
+      if (last_ - stamp <= kMaxStepBack) {
+        line_frames_ = 0;
         throw InputError("frame stamped " + exact(stamp) + " is not after the previous frame (" +
                          exact(last_) + "): out of order or repeated");
+      }
+      line_frames_ = line_frames_ > 0 && stamp > line_last_ ? line_frames_ + 1 : 1;
+      line_last_ = stamp;
+      if (line_frames_ < kConfirmFrames)
+        throw InputError("frame stamped " + exact(stamp) + " is more than " +
+                         std::to_string(static_cast<int>(kMaxStepBack)) +
+                         " s before the previous frame (" + exact(last_) +
+                         "): a new time line (a restarted recording or clock) once " +
+                         std::to_string(kConfirmFrames) + " frames in a row continue it");
       std::cerr << "jpcr_node: the stamps went back by " << last_ - stamp << " s (at "
-                << exact(stamp) << "): a restarted recording or clock; taken as a new time line\n";
+                << exact(stamp) << ") for " << kConfirmFrames
+                << " frames in a row: a restarted recording or clock; taken as a new time line\n";
     }
+    line_frames_ = 0;
     last_ = stamp;
     taken_ = true;
   }
@@ -82,6 +98,8 @@ class StampOrder {
 
   bool taken_ = false;
   double last_ = 0.0;
+  int line_frames_ = 0;     // frames in a row on a time line behind last_ (not taken yet) ...
+  double line_last_ = 0.0;  // ... and the latest of them
 };
 
 /// Calls on_input(input) for each `next(slice)` that is not empty, until a stop. An InputError
