@@ -84,7 +84,20 @@ int GatheredFrameTerms<Lane>::gather(const VertexView& view, const RigidMotion<d
   for (int k = n; k % kLanes != 0; ++k)
     dx[k] = dy[k] = dz[k] = d2[k] = mask[k] = Lane(0);
   n_ = (n + kLanes - 1) / kLanes * kLanes;
+  gathered_ = n;
   return n;
+}
+
+template <typename Lane>
+void GatheredFrameTerms<Lane>::weigh_distances_at(const RigidMotion<double>& T_weight,
+                                                  const Eigen::Vector3d& centre) {
+  const float *qx = raw_.data(), *qy = qx + capacity_, *qz = qy + capacity_;
+  const Eigen::Vector3d offset = T_weight.t - centre;
+  Lane* d2 = sample(3);
+  for (int k = 0; k < gathered_; ++k) {
+    const Eigen::Vector3d e = T_weight.R * Eigen::Vector3d(qx[k], qy[k], qz[k]) + offset;
+    d2[k] = static_cast<Lane>(e.squaredNorm());
+  }
 }
 
 template <typename Lane>

@@ -54,6 +54,10 @@ class GatheredFrameTerms {
   /// Σ w r² (gated samples at w(g) g²) and the count inside the gate, for the gathered samples.
   double cost(const Quadricd& q, const SampleGate<double>& limits, int& count);
 
+  /// The distance terms d² = |T_weight Q − p̄|² of the gathered samples' weights at T_weight
+  /// instead of the gather's T (frame_cost's T_weight); the residuals stay at T.
+  void weigh_distances_at(const RigidMotion<double>& T_weight, const Eigen::Vector3d& centre);
+
  private:
   Lane* sample(int i) { return samples_.data() + static_cast<std::size_t>(i) * capacity_; }
   Lane* column(int i) { return columns_.data() + static_cast<std::size_t>(i) * capacity_; }
@@ -65,6 +69,7 @@ class GatheredFrameTerms {
   std::vector<std::ptrdiff_t> linear_;                    // dv · width + du per offset
   Eigen::Vector3d ray_origin_ = Eigen::Vector3d::Zero();  // p̄ − T.t: camera centre to p̄
   int n_ = 0;                  // gathered samples, padded to a multiple of kLanes with mask 0
+  int gathered_ = 0;           // gathered samples, unpadded
   std::vector<float> raw_;     // the gathered points Q (x, y, z arrays)
   std::vector<Lane> samples_;  // dx dy dz d² mask
   std::vector<Lane> columns_;  // √w (y, r), column-major n x 10
@@ -84,9 +89,10 @@ class GatheredSampler {
     terms_.accumulate(q, limits, with_pose, ray_min_cos2, out);
   }
   double cost(const Quadricd& q, const VertexView& view, const RigidMotion<double>& T,
-              const PixelOffset* pattern, int pattern_size, int u, int v,
-              const SampleGate<double>& limits, int& count) {
+              const RigidMotion<double>& T_weight, const PixelOffset* pattern, int pattern_size,
+              int u, int v, const SampleGate<double>& limits, int& count) {
     terms_.gather(view, T, pattern, pattern_size, u, v, q.center);
+    if (!(T_weight.R == T.R && T_weight.t == T.t)) terms_.weigh_distances_at(T_weight, q.center);
     return terms_.cost(q, limits, count);
   }
 

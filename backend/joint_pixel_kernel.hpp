@@ -189,12 +189,15 @@ JPCR_HD void accumulate_frame_terms(const QuadricT<Scalar>& q, const VertexView&
   }
 }
 
-/// The cost Σ w r² (and the gated count) of one frame's samples, without Jacobians.
+/// The cost Σ w r² (and the gated count) of one frame's samples, without Jacobians: X = T Q for
+/// the residual, and the distance term d² of the weight at T_weight Q. With T_weight = T it is
+/// the cost accumulate_frame_terms sums; the step test holds T_weight at the linearisation
+/// (linearized_pixel_cost).
 template <typename Scalar>
 JPCR_HD Scalar frame_cost(const QuadricT<Scalar>& q, const VertexView& view,
-                          const RigidMotion<Scalar>& T, const PixelOffset* pattern,
-                          int pattern_size, int u, int v, const SampleGate<Scalar>& limits,
-                          int& count) {
+                          const RigidMotion<Scalar>& T, const RigidMotion<Scalar>& T_weight,
+                          const PixelOffset* pattern, int pattern_size, int u, int v,
+                          const SampleGate<Scalar>& limits, int& count) {
   Scalar cost = 0;
   count = 0;
   for (int k = 0; k < pattern_size; ++k) {
@@ -202,10 +205,12 @@ JPCR_HD Scalar frame_cost(const QuadricT<Scalar>& q, const VertexView& view,
     if (!view.in_bounds(su, sv)) continue;
     const Eigen::Vector3f& Qf = view(su, sv);
     if (!is_finite_value(Qf.z())) continue;
-    const Eigen::Matrix<Scalar, 3, 1> X = T.apply(Qf.template cast<Scalar>());
+    const Eigen::Matrix<Scalar, 3, 1> Q = Qf.template cast<Scalar>();
+    const Eigen::Matrix<Scalar, 3, 1> X = T.apply(Q);
+    const Scalar d2 = (T_weight.apply(Q) - q.center).squaredNorm();
     bool inside = false;
     Scalar w = 0;
-    cost += gated_cost(quadric_residual(q, X), (X - q.center).squaredNorm(), limits, inside, w);
+    cost += gated_cost(quadric_residual(q, X), d2, limits, inside, w);
     count += inside ? 1 : 0;
   }
   return cost;
@@ -224,9 +229,10 @@ struct DirectSampler {
                            out);
   }
   JPCR_HD Scalar cost(const QuadricT<Scalar>& q, const VertexView& view,
-                      const RigidMotion<Scalar>& T, const PixelOffset* pattern, int pattern_size,
-                      int u, int v, const SampleGate<Scalar>& limits, int& count) const {
-    return frame_cost(q, view, T, pattern, pattern_size, u, v, limits, count);
+                      const RigidMotion<Scalar>& T, const RigidMotion<Scalar>& T_weight,
+                      const PixelOffset* pattern, int pattern_size, int u, int v,
+                      const SampleGate<Scalar>& limits, int& count) const {
+    return frame_cost(q, view, T, T_weight, pattern, pattern_size, u, v, limits, count);
   }
 };
 
@@ -364,6 +370,16 @@ JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowV
   linearize_joint_pixel(q, w, u, v, p, lambda, sampler, sys);
 }
 
+/// The frames that see the quadric as bits (bit j − 1 for frame j), as linearized_pixel_cost reads
+/// them.
+template <typename Scalar, int MaxFrames>
+JPCR_HD unsigned seen_bits(const JointPixelSystem<Scalar, MaxFrames>& sys, int frames) {
+  unsigned bits = 0;
+  for (int j = 0; j + 1 < frames && j < sys.kPoses; ++j)
+    bits |= sys.seen[j] ? 1u << j : 0u;
+  return bits;
+}
+
 /// Adds an active quadric's share to the reduced system (lower triangle of the dense
 /// n x n matrix S, n = 6 (M − 1), row-major, and s), and diag A to A_diagonal:
 ///   S_jk += δ_jk A_jp − B_jp K_k,   s_j += −g_xi_j − B_jp k.
@@ -405,58 +421,48 @@ JPCR_HD QuadricVector<Scalar> back_substitute(const JointPixelSystem<Scalar, Max
   return delta;
 }
 
-/// The cost Σ w r² of one quadric over the window, re-associated at the window's poses (the
-/// step test of method.md §6). Frames that see it with fewer than min_frame_terms terms, and the
-/// frame-1 terms in Q-full, are left out as in linearize_joint_pixel.
+/// The cost of one quadric at the candidate (its quadric q, the poses `next`) over the terms
+/// of its linearisation at the poses `window` (method.md §6's step test compares the same
+/// terms): the frame-1 terms at (u, v) (not in Q-full, whose quadrics are fixed), and each frame
+/// j that saw it there (`seen`: bit j − 1), that frame's pattern taken at the pixel the quadric
+/// was associated to at `window`; each sample's residual at `next`, the distance term d² of its
+/// weight n₀² / (n₀² + r² + d²) at `window` (held, as the normal equations hold the weights).
+/// Samples outside the gate cost w(gate) gate², so a step that moves samples out of it pays for
+/// them. Re-associated at the candidate, a step was credited with the cost of every frame it moved
+/// out of view, and with d² at the candidate, a step that carried a frame's samples far from the
+/// quadrics made their weights vanish: J-full accepted a 170 m step on a corridor (cost 0.0002
+/// against 0.29), and single-pose Q-full accepted steps whose cost on the same pairs rose. The
+/// next linearisation re-associates.
 template <typename Scalar, typename Sampler>
-JPCR_HD Scalar joint_pixel_cost(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& w, int u,
-                                int v, const JointTermParams& p, Sampler& sampler) {
+JPCR_HD Scalar linearized_pixel_cost(const QuadricT<Scalar>& q,
+                                     const JointWindowView<Scalar>& window,
+                                     const JointWindowView<Scalar>& next, int u, int v,
+                                     unsigned seen, const JointTermParams& p, Sampler& sampler) {
   const SampleGate<Scalar> limits = SampleGate<Scalar>::at(p.fit, q.center);
   Scalar cost = 0;
   int count = 0;
   if (p.estimate_quadrics)
-    cost += sampler.cost(q, w.views[0], RigidMotion<Scalar>{}, w.pattern, w.pattern_size, u, v,
-                         limits, count);
-  for (int j = 1; j < w.frames; ++j) {
-    int su = 0, sv = 0;
-    if (!associate(q.center, w.motions[j], w.views[j], w.camera, p, su, sv)) continue;
-    const Scalar c =
-        sampler.cost(q, w.views[j], w.motions[j], w.pattern, w.pattern_size, su, sv, limits, count);
-    if (count >= p.min_frame_terms) cost += c;
-  }
-  return cost;
-}
-
-/// Q-full's cost of one fixed quadric at the candidate poses `next`, over the frames that saw it
-/// in the linearisation at the poses `window` (`seen`: bit j − 1 for frame j), each frame's
-/// pattern taken at the pixel the quadric was associated to there: the cost the linearisation
-/// models, so that the step test compares the same terms. (Re-associated at the candidate, a
-/// step is credited with the cost of every pair it loses and charged for every pair it gains:
-/// single-pose Q-full then accepted steps whose cost on the same pairs rose, and never
-/// converged.) The next linearisation re-associates.
-template <typename Scalar, typename Sampler>
-JPCR_HD Scalar fixed_pixel_cost(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& window,
-                                const JointWindowView<Scalar>& next, unsigned seen,
-                                const JointTermParams& p, Sampler& sampler) {
-  const SampleGate<Scalar> limits = SampleGate<Scalar>::at(p.fit, q.center);
-  Scalar cost = 0;
+    cost += sampler.cost(q, next.views[0], RigidMotion<Scalar>{}, RigidMotion<Scalar>{},
+                         next.pattern, next.pattern_size, u, v, limits, count);
   for (int j = 1; j < window.frames; ++j) {
     if (((seen >> (j - 1)) & 1u) == 0u) continue;
-    int su = 0, sv = 0, count = 0;
+    int su = 0, sv = 0;
     if (!associate(q.center, window.motions[j], window.views[j], window.camera, p, su, sv))
-      continue;  // not reached: the frame saw it at these poses
-    cost += sampler.cost(q, next.views[j], next.motions[j], next.pattern, next.pattern_size, su, sv,
-                         limits, count);
+      continue;  // not reached: the frame saw it at these poses (the centre does not move)
+    cost += sampler.cost(q, next.views[j], next.motions[j], window.motions[j], next.pattern,
+                         next.pattern_size, su, sv, limits, count);
   }
   return cost;
 }
 
-/// joint_pixel_cost with the sample-by-sample sums.
+/// linearized_pixel_cost with the sample-by-sample sums.
 template <typename Scalar>
-JPCR_HD Scalar joint_pixel_cost(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& w, int u,
-                                int v, const JointTermParams& p) {
+JPCR_HD Scalar linearized_pixel_cost(const QuadricT<Scalar>& q,
+                                     const JointWindowView<Scalar>& window,
+                                     const JointWindowView<Scalar>& next, int u, int v,
+                                     unsigned seen, const JointTermParams& p) {
   DirectSampler<Scalar> sampler;
-  return joint_pixel_cost(q, w, u, v, p, sampler);
+  return linearized_pixel_cost(q, window, next, u, v, seen, p, sampler);
 }
 
 }  // namespace jpcr

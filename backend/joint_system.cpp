@@ -69,13 +69,10 @@ void linearize_row(const JointState& state, const JointWindowView<double>& windo
     share.cost += sys.cost;
     share.terms += sys.count;
     ++share.active;
-    unsigned seen = 0;
-    for (int j = 0; j + 1 < M; ++j) {
+    for (int j = 0; j + 1 < M; ++j)
       share.seen[j] += sys.seen[j] ? 1 : 0;
-      seen |= sys.seen[j] ? 1u << j : 0u;
-    }
     if (keep_factors) share.factors.push_back(PairFactors{i, sys.k, sys.K[0]});
-    if (!p.estimate_quadrics) share.fixed_active.push_back(FixedPixel{i, seen});
+    if (!p.estimate_quadrics) share.fixed_active.push_back(FixedPixel{i, seen_bits(sys, M)});
   }
 }
 
@@ -97,21 +94,22 @@ double step_row(const JointState& state, const JointWindowView<double>& window,
       out.quadric_steps[i] = back_substitute(sys, window.frames, pose_steps);
       apply_quadric_update(q, out.quadric_steps[i]);
     }
-    cost += joint_pixel_cost(q, next, u, v, p, sampler);
+    cost += linearized_pixel_cost(q, window, next, u, v, seen_bits(sys, window.frames), p, sampler);
   }
   return cost;
 }
 
-// J-ftf's step from the kept factors: Δγ_p = k − K Δξ, then the candidate's cost.
+// J-ftf's step from the kept factors: Δγ_p = k − K Δξ, then the candidate's cost (frame 2 sees
+// every active quadric of a pair).
 template <typename Sampler>
-double step_factors(const PairFactors& f, const JointWindowView<double>& next,
-                    const JointTermParams& p, const Vector6d& pose_step, int width,
-                    Sampler& sampler, JointStep& out) {
+double step_factors(const PairFactors& f, const JointWindowView<double>& window,
+                    const JointWindowView<double>& next, const JointTermParams& p,
+                    const Vector6d& pose_step, int width, Sampler& sampler, JointStep& out) {
   Quadricd& q = out.candidate.quadrics[f.pixel];
   out.quadric_steps[f.pixel] = f.k - f.K * pose_step;
   apply_quadric_update(q, out.quadric_steps[f.pixel]);
   const int u = static_cast<int>(f.pixel % width), v = static_cast<int>(f.pixel / width);
-  return joint_pixel_cost(q, next, u, v, p, sampler);
+  return linearized_pixel_cost(q, window, next, u, v, 1u, p, sampler);
 }
 
 // The sums per frame: gathered and vectorised across samples (the default), or sample by sample
@@ -217,18 +215,22 @@ void JointSystem::start_step(const JointState& state, const std::vector<Vector6d
   out.quadric_steps.assign(state.quadrics.size(), QuadricVector<double>::Zero());
 }
 
-void JointSystem::step_pair(const ReducedSystem& system, JointStep& out) const {
+void JointSystem::step_pair(const JointState& state, const ReducedSystem& system,
+                            JointStep& out) const {
+  const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
   const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
-  const JointWindowView<double> next{views_.data(),   moved.data(),
-                                     frames(),        camera_,
-                                     pattern_.data(), static_cast<int>(pattern_.size())};
+  const int pattern_size = static_cast<int>(pattern_.size());
+  const JointWindowView<double> window{views_.data(), motions.data(),  frames(),
+                                       camera_,       pattern_.data(), pattern_size};
+  const JointWindowView<double> next{views_.data(), moved.data(),    frames(),
+                                     camera_,       pattern_.data(), pattern_size};
   const long count = static_cast<long>(system.factors.size());
   double cost = 0.0;
 #pragma omp parallel reduction(+ : cost)
   with_sampler(sampling_, next.pattern_size, [&](auto& sampler) {
 #pragma omp for schedule(dynamic, 256)
     for (long k = 0; k < count; ++k)
-      cost += step_factors(system.factors[static_cast<std::size_t>(k)], next, params_,
+      cost += step_factors(system.factors[static_cast<std::size_t>(k)], window, next, params_,
                            out.pose_steps[0], width_, sampler, out);
   });
   out.cost = cost;
@@ -250,7 +252,9 @@ void JointSystem::step_fixed(const JointState& state, const ReducedSystem& syste
 #pragma omp for schedule(dynamic, 256)
     for (long k = 0; k < count; ++k) {
       const FixedPixel& f = system.fixed_active[static_cast<std::size_t>(k)];
-      cost += fixed_pixel_cost(state.quadrics[f.pixel], window, next, f.seen, params_, sampler);
+      const int u = static_cast<int>(f.pixel % width_), v = static_cast<int>(f.pixel / width_);
+      cost += linearized_pixel_cost(state.quadrics[f.pixel], window, next, u, v, f.seen, params_,
+                                    sampler);
     }
   });
   out.cost = cost;
@@ -290,7 +294,7 @@ void JointSystem::step(const JointState& state, const ReducedSystem& system, dou
   if (!params_.estimate_quadrics)
     step_fixed(state, system, out);
   else if (frames() == 2)
-    step_pair(system, out);
+    step_pair(state, system, out);
   else
     step_window(state, lambda, out);
 }
@@ -309,8 +313,8 @@ std::vector<int> reference_inliers(const VertexMap& reference, const Neighbourho
         const std::size_t i = static_cast<std::size_t>(v) * width + u;
         if (!state.valid[i]) continue;
         const Quadricd& q = state.quadrics[i];
-        sampler.cost(q, view, RigidMotion<double>{}, pattern.offsets.data(), pattern_size, u, v,
-                     SampleGate<double>::at(params.fit, q.center), count[i]);
+        sampler.cost(q, view, RigidMotion<double>{}, RigidMotion<double>{}, pattern.offsets.data(),
+                     pattern_size, u, v, SampleGate<double>::at(params.fit, q.center), count[i]);
       }
   });
   return count;

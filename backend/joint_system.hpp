@@ -60,8 +60,8 @@ struct JointStep {
   std::vector<Vector6d> pose_steps;                  // Δξ of T_2 … T_M
   std::vector<QuadricVector<double>> quadric_steps;  // Δγ_p per pixel, 0 where inactive
   JointState candidate;                              // exp(Δξ^) T, γ ⊕ Δγ
-  double cost = 0.0;  // Σ w r² at the candidate over the quadrics active in the linearisation
-                      // (Q-full: over its (quadric, frame) pairs, fixed_pixel_cost)
+  double cost = 0.0;  // at the candidate, over the terms of the linearisation (its active
+                      // quadrics and the frames that saw each): linearized_pixel_cost
 };
 
 /// How the CPU evaluates each quadric's per-frame sums: gathered into contiguous arrays and
@@ -91,9 +91,10 @@ class JointSystem {
   static bool solve_poses(const ReducedSystem& system, double lambda,
                           std::vector<Vector6d>& pose_steps);
 
-  /// Back-substitutes Δγ_p for the poses' step and evaluates the cost of the candidate,
-  /// re-associated at the new poses. `system` and λ are those of linearize(state, λ): J-ftf
-  /// uses the factors kept in `system`, larger windows recompute each quadric's system.
+  /// Back-substitutes Δγ_p for the poses' step and evaluates the cost of the candidate over the
+  /// linearisation's terms (each frame's pattern where it was associated at `state`). `system` and
+  /// λ are those of linearize(state, λ): J-ftf uses the factors kept in `system`, larger windows
+  /// recompute each quadric's system.
   JointStep step(const JointState& state, const ReducedSystem& system, double lambda,
                  const std::vector<Vector6d>& pose_steps) const;
   /// The same into `out`, reusing its buffers (the candidate state and the quadric steps).
@@ -101,7 +102,7 @@ class JointSystem {
             const std::vector<Vector6d>& pose_steps, JointStep& out) const;
 
  private:
-  void step_pair(const ReducedSystem& system, JointStep& out) const;
+  void step_pair(const JointState& state, const ReducedSystem& system, JointStep& out) const;
   void step_fixed(const JointState& state, const ReducedSystem& system, JointStep& out) const;
   void step_window(const JointState& state, double lambda, JointStep& out) const;
   void start_step(const JointState& state, const std::vector<Vector6d>& pose_steps,

@@ -11,7 +11,8 @@
 //   sum_partials    one block per sum adds the blocks' partials in a fixed order: the reduction
 //                   is deterministic (no atomics), run to run equal.
 //   step_pair       Δγ_p = k − K Δξ (method.md §7), γ ⊕ Δγ in double, and the candidate's cost
-//                   joint_pixel_cost re-associated at the candidate pose (method.md §6); every
+//                   linearized_pixel_cost over the linearisation's terms (frame 2's pattern
+//                   where it was associated at the linearised pose; method.md §6); every
 //                   pixel's candidate quadric is written (inactive ones keep γ_p).
 //
 // Scalar is the linearisation's type; the state (γ_p, T₂) and every sum stay double.
@@ -163,7 +164,8 @@ __global__ void __launch_bounds__(kThreads)
 
 template <typename Scalar>
 __global__ void __launch_bounds__(kThreads)
-    step_pair(const __grid_constant__ PairInputs<Scalar> next,
+    step_pair(const __grid_constant__ PairInputs<Scalar> linearized,
+              const __grid_constant__ PairInputs<Scalar> next,
               const Quadricd* __restrict__ quadrics, const unsigned char* __restrict__ active,
               const Scalar* __restrict__ factors, JointTermParams params,
               PoseStep<Scalar> pose_step, Quadricd* __restrict__ candidate,
@@ -186,7 +188,8 @@ __global__ void __launch_bounds__(kThreads)
         for (int r = 0; r < 6; ++r)
           delta(r) -= factors[(6 + 6 * c + r) * pixels + i] * pose_step.xi[c];
       apply_quadric_update(q, QuadricVector<double>(delta.template cast<double>()));
-      cost[0] = double(joint_pixel_cost(q.template cast<Scalar>(), next.window(), u, v, params));
+      cost[0] = double(linearized_pixel_cost(q.template cast<Scalar>(), linearized.window(),
+                                             next.window(), u, v, 1u, params));
     }
     candidate[i] = q;
   }
@@ -428,9 +431,9 @@ void CudaJointSystem::launch_step(const Vector6d& pose_step) {
   for (int k = 0; k < 6; ++k)
     step.xi[k] = Scalar(pose_step(k));
   step_pair<Scalar><<<d.grid(), dim3(kBlockWidth, kBlockHeight), 0, d.stream>>>(
-      d.inputs<Scalar>(candidate_poses_), d.quadrics.data(), d.active.data(),
-      reinterpret_cast<const Scalar*>(d.factors.data()), params_, step, d.candidate.data(),
-      d.partials.data());
+      d.inputs<Scalar>(state_.poses), d.inputs<Scalar>(candidate_poses_), d.quadrics.data(),
+      d.active.data(), reinterpret_cast<const Scalar*>(d.factors.data()), params_, step,
+      d.candidate.data(), d.partials.data());
   JPCR_CUDA_CHECK_LAUNCH("step_pair", d.stream);
 }
 

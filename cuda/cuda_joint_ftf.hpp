@@ -1,7 +1,7 @@
 // J-ftf on the GPU (method.md §6; issue 7): the joint refinement of one pose T₂ and the dense
 // quadrics of frame 1, with the same per-pixel code as the CPU reference
 // (backend/joint_pixel_kernel.hpp: linearize_joint_pixel<Scalar, 2>, add_schur_terms,
-// joint_pixel_cost) and the same Levenberg-Marquardt loop (backend/joint_problem.hpp).
+// linearized_pixel_cost) and the same Levenberg-Marquardt loop (backend/joint_problem.hpp).
 //
 //   CudaJointSystem        JointProblem on the device: one thread per reference pixel builds
 //                          C_p, B_p, b_p, factors C_p (Cholesky, per thread), keeps k and K for

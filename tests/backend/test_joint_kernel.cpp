@@ -5,6 +5,7 @@
 // solve of its pose block, and JointSystem's reused buffers against fresh ones.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <utility>
 #include <vector>
@@ -416,27 +417,67 @@ JointState quadric_state(const QuadricMap& map, const std::vector<Eigen::Isometr
   return s;
 }
 
-// Q-full's step test compares the same terms as the linearisation: each (quadric, frame) pair it
-// counted, at the pixel it was associated to there. At a zero step the candidate's cost is then
-// the linearisation's (to the rounding of the candidate pose's re-orthonormalisation): this
-// checks the pairs' bookkeeping (a seen bit on the wrong frame drops or adds terms). That the
-// pairs stay fixed over a step is what FixedQuadricAlignment.AWindowEndsWhereEachPoseEndsAlone
+// The step test (J-ftf, J-full, Q-full) compares the same terms as the linearisation: each
+// (quadric, frame) pair it counted, at the pixel it was associated to there, with the frame-1
+// terms of the estimated quadrics. At a zero step (quadrics included) the candidate's cost is the
+// linearisation's (to the rounding of the candidate pose's re-orthonormalisation): this checks
+// the pairs' bookkeeping (a seen bit on the wrong frame drops or adds terms). That the pairs stay
+// fixed over a step is what FixedQuadricAlignment.AWindowEndsWhereEachPoseEndsAlone
 // (test_joint_refinement.cpp) checks.
-TEST(FixedQuadricStep, IsJudgedOnTheLinearisationsPairs) {
+struct StepTestCase {
+  int frames;
+  bool estimate_quadrics;
+};
+
+class StepTest : public ::testing::TestWithParam<StepTestCase> {};
+
+TEST_P(StepTest, IsJudgedOnTheLinearisationsPairs) {
+  const StepTestCase c = GetParam();
+  const JointTestWindow w = render_window(c.frames, 160, "range:1");
+  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  const JointTermParams p = JointParams{}.terms(c.estimate_quadrics);
+  const JointSystem system(w.vertices, w.camera, pattern, p, JointSampling::kReference);
+  std::vector<Eigen::Isometry3d> poses = w.truth;
+  poses.back() = perturbed(poses.back(), 0.01, 1.0, 2);
+  const JointState state = quadric_state(map, poses, 1);
+  // Damped by 1e12, C_p leaves the quadrics' steps k − K Δξ = k at 1e-12 of their size: with
+  // Δξ = 0 the candidate is the state.
+  constexpr double kStill = 1e12;
+  const ReducedSystem lin = system.linearize(state, kStill);
+  ASSERT_GT(lin.active, 1000);
+  for (const FixedPixel& f : lin.fixed_active)
+    ASSERT_NE(f.seen, 0u) << "an active quadric no frame sees";
+  const std::vector<Vector6d> zero(static_cast<std::size_t>(c.frames - 1), Vector6d::Zero());
+  const JointStep still = system.step(state, lin, kStill, zero);
+  EXPECT_NEAR(still.cost, lin.cost, 1e-8 * lin.cost);
+}
+
+INSTANTIATE_TEST_SUITE_P(PairWindowAndFixedQuadrics, StepTest,
+                         ::testing::Values(StepTestCase{2, true}, StepTestCase{3, true},
+                                           StepTestCase{3, false}));
+
+// A step that carries a frame 100 m away cannot lower the step test's cost: each sample's weight
+// n₀² / (n₀² + r² + d²) keeps its distance term d² from the linearisation, and w r² grows with
+// |r| up to the gate's w(g) g², so no sample costs less than it did. With d² at the candidate the
+// weights of the carried samples vanished and the cost fell (J-full accepted a 170 m step on a
+// corridor). Q-full, whose quadrics the step leaves alone.
+TEST(StepTest, ASampleCarriedFarAwayCostsNoLessThanAtTheLinearisation) {
   const JointTestWindow w = render_window(3, 160, "range:1");
   const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
   const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
-  const JointTermParams p = JointParams{}.terms(false);
-  const JointSystem system(w.vertices, w.camera, pattern, p, JointSampling::kReference);
+  const JointSystem system(w.vertices, w.camera, pattern, JointParams{}.terms(false),
+                           JointSampling::kReference);
   std::vector<Eigen::Isometry3d> poses = w.truth;
   poses[2] = perturbed(poses[2], 0.01, 1.0, 2);
   const JointState state = quadric_state(map, poses, 1);
   const ReducedSystem lin = system.linearize(state, 0.0);
   ASSERT_GT(lin.active, 1000);
-  for (const FixedPixel& f : lin.fixed_active)
-    ASSERT_NE(f.seen, 0u) << "an active quadric no frame sees";
-  const JointStep still = system.step(state, lin, 0.0, {Vector6d::Zero(), Vector6d::Zero()});
-  EXPECT_NEAR(still.cost, lin.cost, 1e-8 * lin.cost);
+  Vector6d away = Vector6d::Zero();
+  away.head<3>() = Eigen::Vector3d(60.0, -50.0, 55.0);  // about 100 m
+  const JointStep far = system.step(state, lin, 0.0, {away, away});
+  std::printf("100 m away: cost %.6g, at the linearisation %.6g\n", far.cost, lin.cost);
+  EXPECT_GE(far.cost, lin.cost);
 }
 
 TEST(JointSystemBuffers, ReusedBuffersGiveWhatFreshOnesGive) {
