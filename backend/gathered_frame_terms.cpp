@@ -60,14 +60,14 @@ int GatheredFrameTerms<Lane>::gather(const VertexView& view, const RigidMotion<d
       qx[n] = Q.x();
       qy[n] = Q.y();
       qz[n] = Q.z();
-      n += is_finite_value(Q.z()) ? 1 : 0;
+      n += is_finite_point(Q) ? 1 : 0;
     }
   } else {
     for (int k = 0; k < pattern_size; ++k) {
       const int su = u + pattern[k].du, sv = v + pattern[k].dv;
       if (!view.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
       const Eigen::Vector3f& Q = view(su, sv);
-      if (!is_finite_value(Q.z())) continue;
+      if (!is_finite_point(Q)) continue;
       qx[n] = Q.x();
       qy[n] = Q.y();
       qz[n] = Q.z();

@@ -61,6 +61,12 @@ JPCR_HD bool is_finite_value(float x) {
   return x - x == 0.0f;
 }
 
+/// True for a vertex whose three coordinates are finite (a sample; vertex maps mark a pixel
+/// without depth with NaN, and a caller's map may hold NaN in x or y alone).
+JPCR_HD bool is_finite_point(const Eigen::Vector3f& X) {
+  return is_finite_value(X.x()) && is_finite_value(X.y()) && is_finite_value(X.z());
+}
+
 /// Σ w JᵀJ (lower triangle) and Σ w J r of one 6-parameter problem over the samples inside the
 /// gate (count of them), and the gated cost Σ w(e) e² over every sample with
 /// depth, e = r inside the gate and e = ±gate outside (pixel_lane_sums' `gated`): a robust cost
@@ -113,7 +119,7 @@ JPCR_HD void accumulate_quadric_samples(const QuadricT<Scalar>& q, const VertexV
     if (!vertices.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
     const Eigen::Vector3f& Xf = vertices(su, sv);
     // A vertex with any coordinate not finite is no sample (as VertexPlanes of the dense fit).
-    if (!is_finite_value(Xf.x()) || !is_finite_value(Xf.y()) || !is_finite_value(Xf.z())) continue;
+    if (!is_finite_point(Xf)) continue;
     const Vector3 X = Xf.template cast<Scalar>();
     const QuadricLinearization<Scalar> l = linearize_quadric(q, X);
     const Scalar d2 = (X - q.center).squaredNorm();

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -478,6 +479,29 @@ TEST(StepTest, ASampleCarriedFarAwayCostsNoLessThanAtTheLinearisation) {
   const JointStep far = system.step(state, lin, 0.0, {away, away});
   std::printf("100 m away: cost %.6g, at the linearisation %.6g\n", far.cost, lin.cost);
   EXPECT_GE(far.cost, lin.cost);
+}
+
+// A vertex with x or y not finite (a caller's map; maps from depth mark a missing pixel with
+// NaN in all three) is no sample, as in Quad IT: with NaN x at every 7th pixel of frame 2 the
+// terms were NaN and frame 2 saw no quadric (the review measured `seen` 0, too_few_quadrics).
+TEST(JointSystem, AVertexWithANonFiniteCoordinateIsNoSample) {
+  const JointTestWindow w = render_window(2, 160);
+  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  std::vector<VertexMap> poisoned = w.vertices;
+  for (std::size_t i = 0; i < poisoned[1].size(); i += 7)
+    poisoned[1].data()[i].x() = std::numeric_limits<float>::quiet_NaN();
+  const JointState state = quadric_state(map, w.truth, 1);
+  for (JointSampling sampling : {JointSampling::kGathered, JointSampling::kReference}) {
+    const JointTermParams p = JointParams{}.terms(true);
+    const ReducedSystem clean =
+        JointSystem(w.vertices, w.camera, pattern, p, sampling).linearize(state, 0.0);
+    const ReducedSystem lin =
+        JointSystem(poisoned, w.camera, pattern, p, sampling).linearize(state, 0.0);
+    EXPECT_TRUE(std::isfinite(lin.cost));
+    EXPECT_TRUE(lin.S.allFinite());
+    EXPECT_GT(lin.seen[0], clean.seen[0] * 9 / 10) << "of " << clean.seen[0];
+  }
 }
 
 TEST(JointSystemBuffers, ReusedBuffersGiveWhatFreshOnesGive) {
