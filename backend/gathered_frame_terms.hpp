@@ -75,7 +75,7 @@ class GatheredFrameTerms {
   std::vector<Lane> columns_;  // √w (y, r), column-major n x 10
 };
 
-/// The per-frame sums for linearize_joint_pixel / joint_pixel_cost on the CPU (the sampler
+/// The per-frame sums for linearize_joint_pixel / linearized_pixel_cost on the CPU (the sampler
 /// interface of joint_pixel_kernel.hpp), backed by one GatheredFrameTerms per thread.
 template <typename Lane>
 class GatheredSampler {

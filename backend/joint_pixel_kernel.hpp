@@ -422,8 +422,9 @@ JPCR_HD QuadricVector<Scalar> back_substitute(const JointPixelSystem<Scalar, Max
 }
 
 /// The cost of one quadric at the candidate (its quadric q, the poses `next`) over the terms
-/// of its linearisation at the poses `window` (method.md §6's step test compares the same
-/// terms): the frame-1 terms at (u, v) (not in Q-full, whose quadrics are fixed), and each frame
+/// of its linearisation at the poses `window` (this project's reading of method.md §6's "accept
+/// the step only if the robust cost does not increase": the cost the linearisation models): the
+/// frame-1 terms at (u, v) (not in Q-full, whose quadrics are fixed), and each frame
 /// j that saw it there (`seen`: bit j − 1), that frame's pattern taken at the pixel the quadric
 /// was associated to at `window`; each sample's residual at `next`, the distance term d² of its
 /// weight n₀² / (n₀² + r² + d²) at `window` (held, as the normal equations hold the weights).

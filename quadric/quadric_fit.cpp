@@ -117,7 +117,7 @@ class PixelGroupFit {
     Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
     Eigen::Vector3f centre = Eigen::Vector3f::Zero();
     status_[l] = QuadricStatus::kNoCentre;
-    if (u >= 0 && is_finite_value(vertices_(u, v).z())) {
+    if (u >= 0 && is_finite_point(vertices_(u, v)) && centre_range(vertices_(u, v)) > 0.0) {
       centre = vertices_(u, v);
       const Eigen::Vector3f& normal = normals_(u, v);
       status_[l] = is_finite_value(normal.z()) ? QuadricStatus::kValid : QuadricStatus::kNoNormal;

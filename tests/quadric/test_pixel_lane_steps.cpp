@@ -69,6 +69,35 @@ TEST(PixelLaneSteps, EqualSolveDampedStepAndFlagSingularLanes) {
   }
 }
 
+// The range units change how the singularity floor reads the system, not the step: (S H S +
+// λ diag(S H S)) Δ' = −S g with Δ = S Δ' is (H + λ diag H) Δ = −g, since diag(S H S) = S² diag H.
+// On a 3 cm patch's system (condition about 4e6) the steps at ranges 0.3 to 3 m, where such a
+// patch is seen, agree to its rounding, about 4e6 · 2e-16 ≈ 1e-9 of the step; bound 1e-8. (At
+// 20 m the same 3 cm patch is singular: its curvature columns fall below the floor, as they
+// should for a patch far smaller than its range.)
+TEST(SolveDampedStep, TheRangeUnitsGiveTheSameStep) {
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    NormalEquations6<double> ne;
+    const double scale[6] = {0.03, 0.03, 1.0, 5e-4, 1e-3, 5e-4};  // a 3 cm patch's columns
+    for (int k = 0; k < 40; ++k) {
+      Eigen::Matrix<double, 6, 1> J;
+      for (int i = 0; i < 6; ++i)
+        J(i) = scale[i] * n(rng);
+      ne.add(J, 1e-3 * n(rng), 1.0);
+    }
+    Eigen::Matrix<double, 6, 1> at_one, at_range;
+    ASSERT_TRUE(solve_damped_step(ne, 0.01, 1.0, at_one));
+    for (double range : {0.3, 1.5, 3.0}) {
+      ASSERT_TRUE(solve_damped_step(ne, 0.01, range, at_range)) << range;
+      for (int i = 0; i < 6; ++i)
+        EXPECT_NEAR(at_range(i), at_one(i), 1e-8 * at_one.cwiseAbs().maxCoeff())
+            << "range " << range << ", trial " << trial << ", Δ" << i;
+    }
+  }
+}
+
 TEST(PixelLaneSteps, UpdatesEqualApplyQuadricUpdateAndStepConverged) {
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1.0, 1.0);

@@ -432,6 +432,32 @@ TEST(QuadricFit, CpuFitEqualsTheReferenceKernel) {
   EXPECT_LT(a.rms, 1e-3);
 }
 
+// A caller's vertex map may hold a point with x or y not finite, or the camera centre itself:
+// neither is a centre (the fit's range units need |p̄| > 0), in the lanes and the kernel alike.
+// Before, only z was checked, and the range 0 or NaN made such a pixel `singular`.
+TEST(QuadricFit, AVertexWithoutRangeIsNoCentre) {
+  VertexMap vertices(64, 48, Eigen::Vector3f::Zero());
+  for (int v = 0; v < 48; ++v)
+    for (int u = 0; u < 64; ++u)
+      vertices(u, v) = Eigen::Vector3f((u - 32) * 0.01f, (v - 24) * 0.01f, 1.0f);
+  vertices(20, 20) = Eigen::Vector3f::Zero();
+  vertices(40, 30).x() = std::numeric_limits<float>::quiet_NaN();
+  const NormalMap normals(64, 48, Eigen::Vector3f(0.0f, 0.0f, -1.0f));
+  const QuadricFit fit;
+  const QuadricMap map = fit.estimate(vertices, normals);
+  const NeighbourhoodPattern pattern = fit.params().pattern.for_width(64);
+  const VertexView view{vertices.data(), 64, 48};
+  for (const auto& [u, v] : {std::pair{20, 20}, std::pair{40, 30}}) {
+    EXPECT_EQ(map.status(u, v), QuadricStatus::kNoCentre) << u << ", " << v;
+    Quadricd q;
+    EXPECT_EQ(fit_quadric_pixel<double>(view, pattern.offsets.data(), pattern.size(), u, v,
+                                        normals(u, v), fit.params().fit, q),
+              QuadricStatus::kNoCentre)
+        << u << ", " << v;
+  }
+  EXPECT_EQ(map.status(10, 10), QuadricStatus::kValid);  // the plane around them is fitted
+}
+
 // A pattern that reaches far beyond a small image (radius 64 cells of 8 px, ±512 px on a
 // 50x37 frame): the samples that can never be inside are skipped as the bounds check skips
 // them, each pixel keeps the ones that are, and the result is still the kernel's.

@@ -82,8 +82,9 @@ n=$(grep -c "skipped an input: frame stamped .* is not after the previous frame"
 [ "$n" = 2 ] || { echo "FAIL: $n out-of-order lines, want 2"; cat "$tmp/idle.txt"; fail=1; }
 # A step back of more than a second is a new time line (a restarted recording) once 3 frames in
 # a row continue it: taken, said once. A single stale frame is skipped (it was taken, and the
-# path went back in time), as is a repeated one. Stamps 0, 2, 4, 6, 8 s; played: 8, then 2
-# (stale), 8 (repeated), then 0, 2, 4 (the new line, taken at 4).
+# path went back in time), as is a repeated one, and a frame of the line left (a second
+# publisher ahead in time: the path went back and forth). Stamps 0, 2, 4, 6, 8 s; played: 8,
+# then 2 (stale), 8 (repeated), then 0, 2, 4 (the new line, taken at 4), then 8 (the line left).
 # The camera here names its own frame: odom's child frame is the depth's header.frame_id.
 printf 'synthetic:\n  trajectory:\n    rate: 0.5\n' > "$tmp/slow.yaml"
 expect 0 "wrote 5 frames" -- "$synth" --scene room_spheres --frames 5 --size 160x120 --seed 4 \
@@ -94,14 +95,14 @@ printf '  camera_frame_id: robot1/depth_optical\n' >> "$tmp/robot1.yaml"
 reset_echo=$!; pids+=($reset_echo)
 "$node" "${dds[@]}" --method icp-ftf --idle-timeout 6 > "$tmp/reset.txt" 2>&1 &
 reset_pid=$!; pids+=($reset_pid)
-for frames in 4:5/1 1:2/1 4:5/1 0:3/3; do
+for frames in 4:5/1 1:2/1 4:5/1 0:3/3 4:5/1; do
   expect 0 "published ${frames#*/} frames" -- "$play" --dataset "$tmp/slow" --encoding 32FC1 \
     --frames "${frames%/*}" --as-fast-as-possible --wait-subscribers 15 --params "$tmp/robot1.yaml" \
     --domain $domain
 done
-expect_node $reset_pid 60 "$tmp/reset.txt" "processed 2 frames.*skipped 4 frames" \
-  "a new time line is taken, a stale frame is not"
-grep -q "the stamps went back by 4 s .*for 3 frames in a row.*taken as a new time line" "$tmp/reset.txt" ||
+expect_node $reset_pid 60 "$tmp/reset.txt" "processed 2 frames.*skipped 5 frames" \
+  "a new time line is taken, a stale frame and the line left are not"
+grep -q "the stamps jumped by -4 s .*for 3 frames in a row.*taken as a new time line" "$tmp/reset.txt" ||
   { echo "FAIL: no line about the new time line"; cat "$tmp/reset.txt"; fail=1; }
 n=$(grep -c "taken as a new time line" "$tmp/reset.txt")
 [ "$n" = 1 ] || { echo "FAIL: $n new time lines, want 1"; cat "$tmp/reset.txt"; fail=1; }

@@ -190,9 +190,9 @@ int run_trajectory(int argc, char** argv) {
           "\n"
           "Files: one pose per line, fields separated by spaces or tabs, timestamps strictly\n"
           "increasing; '#' starts a comment. RPE per second follows evaluate_rpe.py: each\n"
-          "pose is paired with the first one at least 1 s later, so across a gap in the\n"
-          "estimate a pair can span more (or, at the end, less) than 1 s. A warning says when\n"
-          "fewer than 90 % of the estimated poses have ground truth.");
+          "pose is paired with the pose closest to 1 s later, so across a gap in the estimate\n"
+          "a pair can span more or less than 1 s, even the pose itself (error 0). A warning\n"
+          "says when fewer than 90 % of the estimated poses have ground truth.");
   return cli::run_program("jpcr_eval traj", [&] {
     if (!args.parse(argc, argv)) return 0;
     const double max_difference = args.get_double("max-difference");
@@ -251,7 +251,9 @@ int run_trajectory(int argc, char** argv) {
     if (associated_fraction(report) < 0.9)
       std::cerr << "jpcr_eval traj: warning: only " << report.ate.translation.count << " of "
                 << report.est_poses << " estimated poses have ground truth within "
-                << max_difference << " s; the errors describe those alone\n";
+                << max_difference
+                << " s; ATE, the relative errors and the drift describe those alone (RPE pairs "
+                   "with ground truth within twice its median interval)\n";
     if (report.relative.pairs == 0)
       std::cerr << "jpcr_eval traj: warning: relative errors n/a: " << kNoRelativePairs << "\n";
 

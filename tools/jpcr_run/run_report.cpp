@@ -54,10 +54,15 @@ void write_errors(JsonWriter& json, const char* name, const std::optional<Trajec
   json.begin_object()
       .field("ate_rmse_m", e->ate.translation.rmse)
       .field("rpe_frame_translation_rmse_m", e->rpe.translation.rmse)
-      .field("rpe_frame_rotation_rmse_deg", e->rpe.rotation.rmse)
-      .field("relative_translation_rms_m", e->relative.translation_rms)
-      .field("relative_rotation_rms_rad", e->relative.rotation_rms)
-      .end_object();
+      .field("rpe_frame_rotation_rmse_deg", e->rpe.rotation.rmse);
+  if (e->relative.pairs > 0) {
+    json.field("relative_translation_rms_m", e->relative.translation_rms)
+        .field("relative_rotation_rms_rad", e->relative.rotation_rms);
+  } else {  // no two consecutive frames with ground truth: not computed, not a perfect 0
+    json.key("relative_translation_rms_m").null();
+    json.key("relative_rotation_rms_rad").null();
+  }
+  json.end_object();
 }
 
 }  // namespace
@@ -237,9 +242,14 @@ void print_error_table(std::ostream& out, const std::string& method,
                 "RPE m/frame", "RPE deg/frame", "rel. transl. m", "rel. rot. rad");
   out << line;
   auto row = [&](const std::string& name, const TrajectoryErrors& e) {
-    std::snprintf(line, sizeof line, "%-10s %11.6f %13.6f %15.5f %15.3e %15.3e\n", name.c_str(),
-                  e.ate.translation.rmse, e.rpe.translation.rmse, e.rpe.rotation.rmse,
-                  e.relative.translation_rms, e.relative.rotation_rms);
+    if (e.relative.pairs > 0)
+      std::snprintf(line, sizeof line, "%-10s %11.6f %13.6f %15.5f %15.3e %15.3e\n", name.c_str(),
+                    e.ate.translation.rmse, e.rpe.translation.rmse, e.rpe.rotation.rmse,
+                    e.relative.translation_rms, e.relative.rotation_rms);
+    else
+      std::snprintf(line, sizeof line, "%-10s %11.6f %13.6f %15.5f %15s %15s\n", name.c_str(),
+                    e.ate.translation.rmse, e.rpe.translation.rmse, e.rpe.rotation.rmse, "n/a",
+                    "n/a");
     out << line;
   };
   if (front_end) row("icp-ftf", *front_end);
