@@ -24,11 +24,11 @@ JPCR_SIMD_CLONES void lane_steps(const PixelLaneSums& s, const double damping[kP
   double inverse[6][kLanes], floor[kLanes];
   double S[6][kLanes];
   bool good[kLanes];
-#pragma omp simd
   for (int l = 0; l < kLanes; ++l) {
-    S[0][l] = S[1][l] = 1.0;  // range_unit_scales
-    S[2][l] = range[l];
-    S[3][l] = S[4][l] = S[5][l] = 1.0 / range[l];
+    double s_l[6];
+    range_unit_scales(range[l], s_l);
+    for (int i = 0; i < 6; ++i)
+      S[i][l] = s_l[i];
   }
   for (int i = 0; i < 6; ++i) {
     for (int j = 0; j <= i; ++j) {

@@ -117,7 +117,8 @@ class PixelGroupFit {
     Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
     Eigen::Vector3f centre = Eigen::Vector3f::Zero();
     status_[l] = QuadricStatus::kNoCentre;
-    if (u >= 0 && is_finite_point(vertices_(u, v)) && centre_range(vertices_(u, v)) > 0.0) {
+    double range = 0.0;
+    if (u >= 0 && centre_with_range(vertices_(u, v), range)) {
       centre = vertices_(u, v);
       const Eigen::Vector3f& normal = normals_(u, v);
       status_[l] = is_finite_value(normal.z()) ? QuadricStatus::kValid : QuadricStatus::kNoNormal;
@@ -126,11 +127,11 @@ class PixelGroupFit {
         active_[l] = true;
       }
     }
+    range_[l] = active_[l] ? range : 1.0;  // 1: any finite scale for an idle lane
     for (int i = 0; i < 9; ++i)
       q_.row[i][l] = R(i / 3, i % 3);
     for (int i = LaneQuadrics::kTz; i < LaneQuadrics::kRows; ++i)
       q_.row[i][l] = 0.0;
-    range_[l] = active_[l] ? centre_range(centre) : 1.0;  // 1: any finite scale for an idle lane
     const SampleGate<double> limits = SampleGate<double>::at(p_, centre.cast<double>());
     for (int axis = 0; axis < 3; ++axis)
       in_.centre[axis][l] = centre(axis);

@@ -168,10 +168,13 @@ JPCR_HD bool solve_damped_step(const NormalEquations6<Scalar>& ne, double dampin
   return true;
 }
 
-/// |p̄| in double, the same in the per-pixel and the lane-parallel fit.
-JPCR_HD double centre_range(const Eigen::Vector3f& centre) {
+/// Whether `centre` can be a quadric's p̄: three finite coordinates and a range |p̄| > 0 (the fit's
+/// range units); `range` gets |p̄| in double, the same in the per-pixel and the lane-parallel fit.
+JPCR_HD bool centre_with_range(const Eigen::Vector3f& centre, double& range) {
+  if (!is_finite_point(centre)) return false;
   const double x = centre.x(), y = centre.y(), z = centre.z();
-  return std::sqrt(x * x + y * y + z * z);
+  range = std::sqrt(x * x + y * y + z * z);
+  return range > 0.0;
 }
 
 /// The early stop of Quad IT: every part of the step below its tolerance.
@@ -201,13 +204,12 @@ JPCR_HD QuadricStatus fit_quadric_pixel(const VertexView& vertices, const PixelO
                                         const Eigen::Vector3f& normal, const QuadricFitParams& p,
                                         QuadricT<Scalar>& q) {
   const Eigen::Vector3f& centre = vertices(u, v);
-  // A centre with any coordinate not finite, or at the camera centre (no range units), is none.
-  if (!is_finite_point(centre) || !(centre_range(centre) > 0.0)) return QuadricStatus::kNoCentre;
+  double range = 0.0;
+  if (!centre_with_range(centre, range)) return QuadricStatus::kNoCentre;
   if (!is_finite_value(normal.z())) return QuadricStatus::kNoNormal;
   q.R = local_frame<Scalar>(normal.template cast<Scalar>().normalized());
   q.center = centre.template cast<Scalar>();
   q.t_z = q.a = q.b = q.c = Scalar(0);
-  const double range = centre_range(centre);
   QuadricT<Scalar> previous = q;
   double previous_cost = 1e300;
   double damping = p.damping;
