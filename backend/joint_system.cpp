@@ -150,9 +150,7 @@ ReducedSystem JointSystem::linearize(const JointState& state, double lambda) con
 void JointSystem::linearize(const JointState& state, double lambda, ReducedSystem& out) const {
   const int M = frames(), n = 6 * (M - 1);
   const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
-  const JointWindowView<double> window{
-      views_.data(), motions.data(),  M,
-      camera_,       pattern_.data(), static_cast<int>(pattern_.size())};
+  const JointWindowView<double> window = window_view(motions);
   const bool keep_factors = M == 2 && params_.estimate_quadrics;
   const auto valid = static_cast<std::size_t>(
       std::count(state.valid.begin(), state.valid.end(), static_cast<unsigned char>(1)));
@@ -215,15 +213,14 @@ void JointSystem::start_step(const JointState& state, const std::vector<Vector6d
   out.quadric_steps.assign(state.quadrics.size(), QuadricVector<double>::Zero());
 }
 
-void JointSystem::step_pair(const JointState& state, const ReducedSystem& system,
-                            JointStep& out) const {
-  const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
-  const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
-  const int pattern_size = static_cast<int>(pattern_.size());
-  const JointWindowView<double> window{views_.data(), motions.data(),  frames(),
-                                       camera_,       pattern_.data(), pattern_size};
-  const JointWindowView<double> next{views_.data(), moved.data(),    frames(),
-                                     camera_,       pattern_.data(), pattern_size};
+JointWindowView<double> JointSystem::window_view(
+    const std::vector<RigidMotion<double>>& motions) const {
+  return {views_.data(), motions.data(),  frames(),
+          camera_,       pattern_.data(), static_cast<int>(pattern_.size())};
+}
+
+void JointSystem::step_pair(const ReducedSystem& system, const JointWindowView<double>& window,
+                            const JointWindowView<double>& next, JointStep& out) const {
   const long count = static_cast<long>(system.factors.size());
   double cost = 0.0;
 #pragma omp parallel reduction(+ : cost)
@@ -237,18 +234,12 @@ void JointSystem::step_pair(const JointState& state, const ReducedSystem& system
 }
 
 void JointSystem::step_fixed(const JointState& state, const ReducedSystem& system,
-                             JointStep& out) const {
-  const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
-  const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
-  const int pattern_size = static_cast<int>(pattern_.size());
-  const JointWindowView<double> window{views_.data(), motions.data(),  frames(),
-                                       camera_,       pattern_.data(), pattern_size};
-  const JointWindowView<double> next{views_.data(), moved.data(),    frames(),
-                                     camera_,       pattern_.data(), pattern_size};
+                             const JointWindowView<double>& window,
+                             const JointWindowView<double>& next, JointStep& out) const {
   const long count = static_cast<long>(system.fixed_active.size());
   double cost = 0.0;
 #pragma omp parallel reduction(+ : cost)
-  with_sampler(sampling_, pattern_size, [&](auto& sampler) {
+  with_sampler(sampling_, next.pattern_size, [&](auto& sampler) {
 #pragma omp for schedule(dynamic, 256)
     for (long k = 0; k < count; ++k) {
       const FixedPixel& f = system.fixed_active[static_cast<std::size_t>(k)];
@@ -260,17 +251,12 @@ void JointSystem::step_fixed(const JointState& state, const ReducedSystem& syste
   out.cost = cost;
 }
 
-void JointSystem::step_window(const JointState& state, double lambda, JointStep& out) const {
-  const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
-  const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
-  const int M = frames(), pattern_size = static_cast<int>(pattern_.size());
-  const JointWindowView<double> window{views_.data(), motions.data(),  M,
-                                       camera_,       pattern_.data(), pattern_size};
-  const JointWindowView<double> next{views_.data(), moved.data(),    M,
-                                     camera_,       pattern_.data(), pattern_size};
+void JointSystem::step_window(const JointState& state, double lambda,
+                              const JointWindowView<double>& window,
+                              const JointWindowView<double>& next, JointStep& out) const {
   double cost = 0.0;
 #pragma omp parallel reduction(+ : cost)
-  with_sampler(sampling_, pattern_size, [&](auto& sampler) {
+  with_sampler(sampling_, next.pattern_size, [&](auto& sampler) {
 #pragma omp for schedule(dynamic, kRowChunk)
     for (int v = 0; v < height_; ++v)
       cost += step_row<kMaxWindowFrames>(state, window, next, params_, lambda,
@@ -289,14 +275,17 @@ JointStep JointSystem::step(const JointState& state, const ReducedSystem& system
 void JointSystem::step(const JointState& state, const ReducedSystem& system, double lambda,
                        const std::vector<Vector6d>& pose_steps, JointStep& out) const {
   start_step(state, pose_steps, out);
+  const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
+  const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
+  const JointWindowView<double> window = window_view(motions), next = window_view(moved);
   // J-ftf keeps its factors, Q-full has no quadric step (only the candidate's cost), J-full
   // recomputes each quadric's system.
   if (!params_.estimate_quadrics)
-    step_fixed(state, system, out);
+    step_fixed(state, system, window, next, out);
   else if (frames() == 2)
-    step_pair(state, system, out);
+    step_pair(system, window, next, out);
   else
-    step_window(state, lambda, out);
+    step_window(state, lambda, window, next, out);
 }
 
 std::vector<int> reference_inliers(const VertexMap& reference, const NeighbourhoodPattern& pattern,
