@@ -52,8 +52,8 @@ struct IcpParams {
   int depth_weight_exponent = 4;
   float min_step_translation = 1e-5f;  // m, stop a level when the update is smaller ...
   float min_step_rotation = 1e-4f;     // deg, ... in both translation and rotation
-  /// Relative Levenberg damping added to the diagonal of JᵀWJ, which keeps degenerate
-  /// directions (a plane) from drifting.
+  /// Relative Levenberg damping added to the diagonal of JᵀWJ (tr/6 times it). The directions
+  /// the geometry does not observe at all (a plane's in-plane motions) are left out of each step.
   double damping = 1e-6;
   // Verdicts (IcpVerdict).
   /// Pairs needed at the coarsest level that runs, for a 640x480 frame (whose coarsest level is
