@@ -1,5 +1,6 @@
 #include "jpcr/io/atomic_file.hpp"
 
+#include <fcntl.h>
 #include <signal.h>
 #include <unistd.h>
 
@@ -73,7 +74,20 @@ void remove_abandoned_temporaries(const fs::path& directory) noexcept {
   }
 }
 
+// fsync of a file or directory by name: 0, or the errno of the failure.
+int sync_to_disk(const std::string& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return errno;
+  const int error = ::fsync(fd) == 0 ? 0 : errno;
+  ::close(fd);
+  return error;
+}
+
 }  // namespace
+
+void sync_directory(const std::string& dir) {
+  sync_to_disk(dir.empty() ? std::string(".") : dir);
+}
 
 bool process_is_gone(long pid) {
   if (pid <= 0 || pid == ::getpid()) return false;
@@ -98,9 +112,15 @@ void write_file_atomically(const std::string& path,
       out.close();
       if (!out) throw failed(errno);
     }
+    // On the disk before the rename: otherwise a power loss can leave `path` renamed but empty.
+    // EINVAL: a file system without fsync (a pipe-backed one), nothing to wait for.
+    const int error = sync_to_disk(tmp);
+    if (error != 0 && error != EINVAL)
+      throw InputError(path + ": cannot be flushed to the disk (" + std::strerror(error) + ")");
     if (std::rename(tmp.c_str(), path.c_str()) != 0) {
       throw InputError(path + ": cannot be renamed into place (" + std::strerror(errno) + ")");
     }
+    sync_directory(fs::path(path).parent_path().string());
   } catch (...) {
     std::remove(tmp.c_str());
     throw;

@@ -1,5 +1,7 @@
 // Outputs are written whole or not at all: the content goes to a temporary file in the same
-// directory, which is renamed over the target only after it was written and flushed. The
+// directory, which is renamed over the target only after it was written and flushed to the disk
+// (fsync: after a power loss the target is the old file or the new one, never an empty one); the
+// directory is flushed after the rename. The
 // temporary is hidden, `.NAME.jpcr-tmp.PID.N`; one left by a process that was killed outright
 // (SIGKILL) is removed by the next write into that directory once the PID no longer exists.
 #pragma once
@@ -22,6 +24,9 @@ void write_file_atomically(const std::string& path,
 /// not gone. PIDs are this host's: a file system shared with another host running the same
 /// program can see its live PIDs as gone.
 bool process_is_gone(long pid);
+
+/// Flushes a directory's entries (renames into it) to the disk; best effort, errors ignored.
+void sync_directory(const std::string& dir);
 
 /// Creates `dir` and its parents when missing; throws InputError naming it on failure.
 void ensure_directory(const std::string& dir);

@@ -41,6 +41,23 @@ bool starts_with(const std::string& bytes, const char* magic, std::size_t length
   return bytes.size() >= length && bytes.compare(0, length, magic, length) == 0;
 }
 
+// The width and height a PNG's IHDR chunk declares (big-endian, bytes 16–23); false when the
+// bytes do not start as a PNG with its IHDR.
+bool png_header_size(const std::string& bytes, long long& width, long long& height) {
+  if (!starts_with(bytes, "\x89PNG\r\n\x1a\n", 8) || bytes.size() < 24 ||
+      bytes.compare(12, 4, "IHDR") != 0)
+    return false;
+  const auto be32 = [&](std::size_t at) {
+    long long v = 0;
+    for (std::size_t k = 0; k < 4; ++k)
+      v = v << 8 | static_cast<unsigned char>(bytes[at + k]);
+    return v;
+  };
+  width = be32(16);
+  height = be32(20);
+  return true;
+}
+
 // Only PNG and JPEG reach OpenCV: cv::imdecode otherwise tries every codec it was built with, and
 // some (GDCM's DICOM reader) abort the process on malformed input, which fuzzing found.
 cv::Mat decode(const std::string& bytes, const std::string& name, int flags) {
@@ -86,16 +103,22 @@ DepthImage load_depth_png(const std::string& path, double depth_scale, int expec
 
 DepthImage decode_depth_png(const std::string& bytes, const std::string& path, double depth_scale,
                             int expected_width, int expected_height) {
+  const auto check_size = [&](long long width, long long height) {
+    if (expected_width > 0 && (width != expected_width || height != expected_height)) {
+      throw InputError(path + ": image is " + std::to_string(width) + "x" + std::to_string(height) +
+                       " but the camera is " + std::to_string(expected_width) + "x" +
+                       std::to_string(expected_height));
+    }
+  };
+  // The header's size first: a small file can declare 16384x16384 (600 MB decoded).
+  long long width = 0, height = 0;
+  if (png_header_size(bytes, width, height)) check_size(width, height);
   const cv::Mat raw = decode(bytes, path, cv::IMREAD_UNCHANGED);
   if (raw.type() != CV_16UC1) {
     throw InputError(path + ": expected a 16-bit single-channel depth PNG, got " +
                      describe_png_header(bytes, raw));
   }
-  if (expected_width > 0 && (raw.cols != expected_width || raw.rows != expected_height)) {
-    throw InputError(path + ": image is " + std::to_string(raw.cols) + "x" +
-                     std::to_string(raw.rows) + " but the camera is " +
-                     std::to_string(expected_width) + "x" + std::to_string(expected_height));
-  }
+  check_size(raw.cols, raw.rows);
   DepthImage depth(raw.cols, raw.rows, 0.0f);
   const float inv_scale = static_cast<float>(1.0 / depth_scale);
   for (int v = 0; v < raw.rows; ++v) {

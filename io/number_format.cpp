@@ -23,11 +23,17 @@ std::string format_timestamp(double value) {
 }
 
 bool parse_double(const std::string& token, double& value) {
-  if (token.empty()) return false;
-  // strtod accepts "nan"/"inf" and hex floats; the callers check finiteness themselves.
-  char* end = nullptr;
-  value = std::strtod(token.c_str(), &end);
-  return end == token.c_str() + token.size();
+  // Decimal or scientific notation, with an optional sign, and the whole token: no leading
+  // space and no hex float (strtod took "0x1.11p-5" as a timestamp, and named its map by the
+  // decimal value). "nan" and "inf" parse; the callers check finiteness themselves.
+  const char* first = token.data();
+  const char* last = first + token.size();
+  if (first != last && *first == '+') {  // from_chars takes '-' only
+    ++first;
+    if (first != last && *first == '-') return false;
+  }
+  const auto result = std::from_chars(first, last, value, std::chars_format::general);
+  return result.ec == std::errc() && result.ptr == last;
 }
 
 }  // namespace jpcr

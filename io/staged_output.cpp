@@ -224,6 +224,7 @@ void StagedOutput::commit() {
     }
     moved_in.push_back(name);
   }
+  sync_directory(target_);  // the renames, on the disk
   fs::remove_all(staging_, ec);
   committed_ = true;
 }

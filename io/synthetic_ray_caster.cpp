@@ -112,11 +112,13 @@ SyntheticFrame render(const SyntheticScene& scene, const CameraIntrinsics& camer
   }
   out.frame.depth = add_depth_noise(out.exact_depth, out.normals, camera, noise, seed, frame_index);
   // Ground truth only where there is a measurement: not at a dropout of the noise model, nor
-  // past what a depth PNG holds (65535 / depth_scale, 13.1 m at 5000 per metre), where the
-  // written depth is 0. A method can return nothing there, and its coverage should not count it.
+  // past what a depth PNG holds (65535 / depth_scale, 13.1 m at 5000 per metre), nor under
+  // half its step, where the written depth is 0. A method can return nothing there, and its
+  // coverage should not count it.
   for (std::size_t i = 0; i < out.frame.depth.size(); ++i) {
     float& z = out.frame.depth[i];
-    if (static_cast<double>(z) * camera.depth_scale >= 65535.5) z = 0.0f;  // as save_depth_png
+    const double written = static_cast<double>(z) * camera.depth_scale;
+    if (written >= 65535.5 || written < 0.5) z = 0.0f;  // as save_depth_png
     if (z <= 0.0f && out.surface[i] >= 0) {
       out.curvature[i] = Eigen::Vector2f(nan, nan);
       out.normals[i] = invalid_vector();

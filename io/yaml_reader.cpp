@@ -1,8 +1,10 @@
 #include "jpcr/io/yaml_reader.hpp"
 
+#include <cctype>
 #include <cmath>
 #include <limits>
 #include <set>
+#include <vector>
 
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -178,21 +180,41 @@ YAML::Node load_yaml_file(const std::string& path) {
 }
 
 YAML::Node parse_yaml(const std::string& text, const std::string& name) {
-  // yaml-cpp parses recursively; refuse absurd nesting before it can overflow the stack.
+  // yaml-cpp parses recursively; refuse absurd nesting before it can overflow the stack. Flow
+  // brackets count outside comments and quoted scalars ("# range [0, 1)" opens nothing).
   constexpr int kMaxDepth = 64;
   int depth = 0;
-  for (char c : text) {
-    if (c == '[' || c == '{') {
+  char quote = 0;  // ' or " while inside a quoted scalar
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (quote) {
+      if (c == '\\' && quote == '"')
+        ++i;  // an escaped character
+      else if (c == quote)
+        quote = 0;
+    } else if (c == '#' && (i == 0 || std::isspace(static_cast<unsigned char>(text[i - 1])))) {
+      while (i + 1 < text.size() && text[i + 1] != '\n')
+        ++i;
+    } else if (c == '\'' || c == '"') {
+      quote = c;
+    } else if (c == '[' || c == '{') {
       if (++depth > kMaxDepth) throw InputError(name + ": YAML nested too deeply");
     } else if ((c == ']' || c == '}') && depth > 0) {
       --depth;
     }
   }
+  std::vector<YAML::Node> documents;
   try {
-    return YAML::Load(text);
+    documents = YAML::LoadAll(text);
   } catch (const YAML::Exception& e) {
     throw InputError(name + ":" + std::to_string(e.mark.line + 1) +
                      ": YAML syntax error: " + e.msg);
   }
+  // A second document ('---') was ignored without a word.
+  if (documents.size() > 1) {
+    throw InputError(name + ": holds " + std::to_string(documents.size()) +
+                     " YAML documents (separated by '---'); one is expected");
+  }
+  return documents.empty() ? YAML::Node() : documents.front();
 }
 }  // namespace jpcr

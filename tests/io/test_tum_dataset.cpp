@@ -9,6 +9,7 @@
 
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/depth_png.hpp"
+#include "jpcr/io/open_dataset.hpp"
 #include "jpcr/io/trajectory_metrics.hpp"
 #include "jpcr/io/tum_dataset.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -167,6 +168,24 @@ TEST(TumDataset, MissingDirectoryAndList) {
             std::string::npos);
 }
 
+// The directory's own camera.yaml says the scale its depth PNGs were written at: a --config with
+// another scale read every depth wrong without a word; other intrinsics are a calibration.
+TEST(TumDataset, AGivenCameraMustKeepTheDirectorysDepthScale) {
+  test::TempDir dir;
+  make_sequence(dir, 2);
+  CameraIntrinsics own = tiny_camera();
+  own.depth_scale = 5000.0;
+  dir.write("camera.yaml", format_camera_yaml(own));
+  CameraIntrinsics given = own;
+  given.fx = 2.0;
+  EXPECT_EQ(open_dataset(dir.path(), given, DatasetParams{})->size(), 2u);
+  given.depth_scale = 1000.0;
+  EXPECT_NE(error_of([&] {
+              open_dataset(dir.path(), given, DatasetParams{});
+            }).find("the camera given has depth_scale 1000"),
+            std::string::npos);
+}
+
 TEST(TumDataset, EmptySequence) {
   test::TempDir dir;
   dir.write("depth.txt", "# nothing here\n");
@@ -227,6 +246,12 @@ TEST(TumDataset, CorruptAndEightBitPngsAndWrongSize) {
   const std::string rgba = error_of([&] { dataset.load(1); });
   EXPECT_NE(rgba.find("got 16-bit RGBA"), std::string::npos) << rgba;
   EXPECT_NE(error_of([&] { dataset.load(2); }).find("image is 8x5 but the camera is 8x6"),
+            std::string::npos);
+  // The header's size is checked before decoding: a few bytes declaring 16384x16384 (16-bit
+  // grey) are refused as the wrong size, not decoded into 512 MB first.
+  std::string header("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\x40\0\0\0\x40\0\x10\0\0\0\0", 29);
+  dir.write("depth/2.png", header + "truncated");
+  EXPECT_NE(error_of([&] { dataset.load(2); }).find("image is 16384x16384 but the camera is 8x6"),
             std::string::npos);
 }
 

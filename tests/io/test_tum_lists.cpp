@@ -1,8 +1,10 @@
 #include <algorithm>
+#include <cmath>
 
 #include <gtest/gtest.h>
 
 #include "jpcr/io/atomic_file.hpp"
+#include "jpcr/io/number_format.hpp"
 #include "jpcr/io/timestamp_association.hpp"
 #include "jpcr/io/tum_lists.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -44,6 +46,25 @@ TEST(FileList, RejectsUnsortedDuplicateAndMalformedLinesNamingFileAndLine) {
   EXPECT_NE(error_of([] { parse_file_list("1.0\n", "d.txt"); }).find("d.txt:1:"),
             std::string::npos);
   EXPECT_NE(error_of([] { parse_file_list("nan a.png\n", "d.txt"); }).find("not finite"),
+            std::string::npos);
+}
+
+TEST(ParseDouble, TakesDecimalAndScientificTokensWhole) {
+  double v = 0.0;
+  EXPECT_TRUE(parse_double("1305031102.175304", v));
+  EXPECT_DOUBLE_EQ(v, 1305031102.175304);
+  EXPECT_TRUE(parse_double("+2.5e-3", v));
+  EXPECT_DOUBLE_EQ(v, 2.5e-3);
+  EXPECT_TRUE(parse_double("-.5", v));
+  EXPECT_DOUBLE_EQ(v, -0.5);
+  EXPECT_TRUE(parse_double("nan", v));  // finiteness is the callers' check
+  EXPECT_TRUE(std::isnan(v));
+  // strtod took a hex float (a timestamp named its map by another value) and leading space.
+  for (const char* bad : {"0x1.11p-5", " 1", "1 ", "", "+", "+-1", "1e", "1.5x", "1e400"})
+    EXPECT_FALSE(parse_double(bad, v)) << "'" << bad << "'";
+  EXPECT_NE(error_of([] {
+              parse_file_list("0x1.11p-5 a.png\n", "d.txt");
+            }).find("d.txt:1: timestamp '0x1.11p-5' is not a number"),
             std::string::npos);
 }
 

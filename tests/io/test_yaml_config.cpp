@@ -79,6 +79,23 @@ TEST(CameraYaml, ErrorsNameFileLineAndKey) {
             std::string::npos);
   const std::string scalar = dir.write("x.yaml", "just a string\n");
   EXPECT_NE(error_of([&] { load_camera_yaml(scalar); }).find("must be a map"), std::string::npos);
+
+  // A second document was ignored without a word.
+  const std::string two = dir.write("two.yaml", base + "depth_scale: 5000\n---\nfx: 1\n");
+  EXPECT_NE(error_of([&] { load_camera_yaml(two); }).find("holds 2 YAML documents"),
+            std::string::npos);
+}
+
+TEST(CameraYaml, BracketsInCommentsAndQuotesAreNoNesting) {
+  test::TempDir dir;
+  std::string text = "fx: 525\nfy: 525\ncx: 319.5\ncy: 239.5\nwidth: 640\nheight: 480\n";
+  for (int k = 0; k < 70; ++k)
+    text += "# valid range [0, 1) note " + std::to_string(k) + "\n";
+  text += "depth_scale: 5000  # '[[[{{{\n";
+  EXPECT_EQ(load_camera_yaml(dir.write("c.yaml", text)).depth_scale, 5000.0);
+  // Real nesting is still refused before yaml-cpp recurses.
+  const std::string deep = dir.write("deep.yaml", "fx: " + std::string(65, '[') + "\n");
+  EXPECT_NE(error_of([&] { load_camera_yaml(deep); }).find("nested too deeply"), std::string::npos);
 }
 
 TEST(Params, DefaultFileLoadsAndUnknownKeysAreErrors) {
