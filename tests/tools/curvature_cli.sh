@@ -16,6 +16,9 @@ expect 0 "wrote 3 frames" -- "$synth" --scene room_spheres --frames 3 --noise ra
   --size 160x120 --seed 2 --out "$tmp/seq"
 expect 0 "wrote 3 curvature maps" -- "$curv" --dataset "$tmp/seq" --method it --out "$tmp/it" --ply
 expect 0 "wrote 2 curvature maps" -- "$curv" --dataset "$tmp/seq" --method ls --frames 1:3 --out "$tmp/ls"
+# Only Quad IT has a CUDA kernel: --device with Quad LS says so (it ran on the CPU silently).
+expect 0 "warning: --device has no effect: method ls runs on the CPU" -- \
+  "$curv" --dataset "$tmp/seq" --method ls --frames 0 --device cpu --out "$tmp/ls_device"
 for d in curvature curvature_png ply; do
   n=$(ls "$tmp/it/$d" | wc -l)
   [ "$n" = 3 ] || { echo "FAIL: it/$d has $n files, want 3"; fail=1; }

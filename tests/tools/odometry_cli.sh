@@ -87,6 +87,9 @@ expect 2 "mode: unknown tracking mode 'sideways'" -- "$odo" --dataset "$fr1" --m
 expect 2 "frames must be >= 0" -- "$odo" --dataset "$fr1" --frames -1 --out "$tmp/x.txt"
 expect 2 "summary and --out name the same file" -- \
   "$odo" --dataset "$fr1" --config "$cam" --out "$tmp/x.txt" --summary "$tmp/./x.txt"
+# Relative names of a file not yet there ("x.txt" stayed relative, "./x.txt" became absolute).
+(cd "$tmp" && expect 2 "summary and --out name the same file" -- \
+  "$odo" --dataset "$fr1" --config "$cam" --out rel.txt --summary ./rel.txt; exit $fail) || fail=1
 mkdir -p "$tmp/adir"
 expect 1 "adir: names a directory" -- "$odo" --dataset "$fr1" --config "$cam" --out "$tmp/x.txt" \
   --summary "$tmp/adir"

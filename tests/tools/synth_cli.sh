@@ -87,6 +87,13 @@ expect 2 "frames must be in 1..1000000" -- "$synth" --frames 2000000000 --out "$
 expect 1 "scene 'nosuch' not found" -- "$synth" --scene nosuch --out "$tmp/x"
 expect 1 "bad.yaml:3: key 'surfaces\[0\].radius': must be positive" -- "$synth" --scene "$tmp/bad.yaml" --out "$tmp/x"
 expect 1 "distortion must be zero" -- "$synth" --config "$tmp/distorted.yaml" --frames 1 --out "$tmp/x"
+# A depth scale the 16-bit PNG cannot carry the scene at (1 m steps; 6.5 cm of range).
+for scale in 1 1000000; do
+  printf 'fx: 500\nfy: 500\ncx: 40\ncy: 30\nwidth: 80\nheight: 60\ndepth_scale: %s\n' "$scale" \
+    > "$tmp/scale.yaml"
+  expect 1 "scale.yaml: depth_scale .* per metre: a 16-bit depth PNG would hold steps of" -- \
+    "$synth" --config "$tmp/scale.yaml" --frames 1 --out "$tmp/x"
+done
 expect 1 "not empty (use --force" -- "$synth" --frames 1 --size 80x60 --out "$tmp/rail"
 [ -e "$tmp/x" ] && { echo "FAIL: output written after an error"; fail=1; }
 expect 0 "wrote 1 frames" -- "$synth" --frames 1 --size 80x60 --out "$tmp/rail" --force

@@ -167,8 +167,13 @@ int run(int argc, char** argv) {
     if (limit < 0) throw cli::UsageError("--frames must be >= 0");
     const std::string out = args.get("out");
     const std::string summary = args.has("summary") ? args.get("summary") : out + ".json";
-    // Before the run, so it fails early.
-    if (std::filesystem::weakly_canonical(out) == std::filesystem::weakly_canonical(summary))
+    // Before the run, so it fails early. Absolute first: weakly_canonical leaves a relative path
+    // that does not exist yet relative, so "o.txt" and "./o.txt" compared unequal.
+    const auto resolved = [](const std::string& file) {
+      std::error_code ec;
+      return std::filesystem::weakly_canonical(std::filesystem::absolute(file, ec), ec);
+    };
+    if (resolved(out) == resolved(summary))
       throw cli::UsageError("--summary and --out name the same file: " + out);
     for (const std::string& file : {out, summary}) {
       require_output_file_apart_from(file, args.get("dataset"), "--dataset");

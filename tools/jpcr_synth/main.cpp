@@ -10,6 +10,7 @@
 #include "cli/progress.hpp"
 #include "cli/stop_signal.hpp"
 #include "jpcr/io/camera_yaml.hpp"
+#include "jpcr/io/number_format.hpp"
 #include "jpcr/io/params.hpp"
 #include "jpcr/io/synthetic_writer.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -35,7 +36,8 @@ int run(int argc, char** argv) {
       "jpcr_synth",
       "Ray-traces a synthetic RGB-D sequence of an analytic scene (planes, spheres,\n"
       "cylinders, tori, boxes) and writes it in the TUM RGB-D layout with exact\n"
-      "ground truth: depth/ (16-bit PNG at 5000/m), rgb/ (shaded by normal),\n"
+      "ground truth: depth/ (16-bit PNG at the camera's depth_scale, 5000/m by\n"
+      "default), rgb/ (shaded by normal),\n"
       "depth.txt, rgb.txt, groundtruth.txt (exact camera-to-world poses),\n"
       "curvature/*.npy (float32 HxWx2, k1 >= k2 in 1/m, NaN where undefined),\n"
       "normals/*.npy (float32 HxWx3, camera axes) and camera.yaml.");
@@ -83,6 +85,17 @@ int run(int argc, char** argv) {
     int width = camera.width, height = camera.height;
     if (args.has("size")) cli::parse_image_size("size", args.get("size"), width, height);
     if (width != camera.width || height != camera.height) camera = camera.resized(width, height);
+    // The depth PNG holds depth in steps of 1/depth_scale up to 65535/depth_scale: a scale of 1
+    // wrote 1 m steps under exact curvature ground truth, 1e6 an empty sequence (6.5 cm range).
+    if (!(camera.depth_scale >= 1000.0 && camera.depth_scale <= 32767.0)) {
+      throw InputError((args.has("config") ? args.get("config") : "camera") + ": depth_scale " +
+                       format_double(camera.depth_scale) +
+                       " per metre: a 16-bit depth PNG would hold steps of " +
+                       format_double(1000.0 / camera.depth_scale) + " mm up to " +
+                       format_double(65535.0 / camera.depth_scale) +
+                       " m; jpcr_synth needs steps of 1 mm or finer and 2 m of range "
+                       "(1000 <= depth_scale <= 32767)");
+    }
 
     // --force replaces the entries written into OUT (depth/, curvature/, the lists, ...): an
     // input file inside OUT may be one of them, or inside one.
