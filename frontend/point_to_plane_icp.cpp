@@ -121,11 +121,11 @@ constexpr double kUnobserved = 1e-5;
 // The Gauss-Newton step of (H + λ tr(H)/6 I) ξ = −b (method.md §10: the minus sign the paper
 // lacks) restricted to the directions the geometry observes. Along a direction G does not
 // observe (a corridor's axis, a plane's in-plane motions) the gradient is the normals' noise,
-// and the full step moved the pose by centimetres to decimetres there in one frame (a corridor,
-// true motion 2.5 mm). Such directions are taken out of the step (the step minimises the
-// linearisation over the rest, as a degeneracy-aware solver does: Zhang, Kaess and Singh, ICRA
-// 2016); they keep the initial guess. Only where the noise correction holds (σ² ≤
-// kCorrectableNormalNoise): beyond it G is not the geometry's.
+// and the full step moved the pose there by 8.9 mm in a noise-free pair of a corridor, past
+// max_translation in 5 of 9 pairs of a corridor walk. Such directions are taken out of the step
+// (the step minimises the linearisation over the rest, as a degeneracy-aware solver does: Zhang,
+// Kaess and Singh, ICRA 2016); they keep the initial guess. Only where the noise correction holds
+// (σ² ≤ kCorrectableNormalNoise): beyond it G is not the geometry's.
 Vector6d observable_step(const NormalEquations& eq, const IcpParams& params) {
   Matrix6d H = eq.hessian();
   H.diagonal().array() += params.damping * H.trace() / 6.0;

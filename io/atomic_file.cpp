@@ -120,7 +120,6 @@ void write_file_atomically(const std::string& path,
     if (std::rename(tmp.c_str(), path.c_str()) != 0) {
       throw InputError(path + ": cannot be renamed into place (" + std::strerror(errno) + ")");
     }
-    sync_directory(fs::path(path).parent_path().string());
   } catch (...) {
     std::remove(tmp.c_str());
     throw;

@@ -1,7 +1,7 @@
 // Outputs are written whole or not at all: the content goes to a temporary file in the same
 // directory, which is renamed over the target only after it was written and flushed to the disk
-// (fsync: after a power loss the target is the old file or the new one, never an empty one); the
-// directory is flushed after the rename. The
+// (fsync: after a power loss the target is the old file or the new one, never an empty one; the
+// rename itself may be lost, a staged output's directory is flushed after its renames). The
 // temporary is hidden, `.NAME.jpcr-tmp.PID.N`; one left by a process that was killed outright
 // (SIGKILL) is removed by the next write into that directory once the PID no longer exists.
 #pragma once

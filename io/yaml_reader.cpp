@@ -2,9 +2,12 @@
 
 #include <cctype>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <set>
 #include <vector>
+
+#include <yaml-cpp/depthguard.h>
 
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -181,10 +184,13 @@ YAML::Node load_yaml_file(const std::string& path) {
 
 YAML::Node parse_yaml(const std::string& text, const std::string& name) {
   // yaml-cpp parses recursively; refuse absurd nesting before it can overflow the stack. Flow
-  // brackets count outside comments and quoted scalars ("# range [0, 1)" opens nothing).
+  // brackets count outside comments and quoted scalars ("# range [0, 1)" opens nothing); a quote
+  // opens a scalar only where one can start (after ": ", "- ", a flow bracket or comma, or at a
+  // line's start), so the apostrophe of "model: don't care" is text.
   constexpr int kMaxDepth = 64;
   int depth = 0;
-  char quote = 0;  // ' or " while inside a quoted scalar
+  char quote = 0;    // ' or " while inside a quoted scalar
+  char last = '\n';  // the last character outside spaces on this line
   for (std::size_t i = 0; i < text.size(); ++i) {
     const char c = text[i];
     if (quote) {
@@ -192,29 +198,45 @@ YAML::Node parse_yaml(const std::string& text, const std::string& name) {
         ++i;  // an escaped character
       else if (c == quote)
         quote = 0;
-    } else if (c == '#' && (i == 0 || std::isspace(static_cast<unsigned char>(text[i - 1])))) {
+      last = c;
+      continue;
+    }
+    const bool space = c == ' ' || c == '\t';
+    if (c == '#' && (i == 0 || std::isspace(static_cast<unsigned char>(text[i - 1])))) {
       while (i + 1 < text.size() && text[i + 1] != '\n')
         ++i;
-    } else if (c == '\'' || c == '"') {
+      continue;
+    }
+    if ((c == '\'' || c == '"') && std::strchr("\n:-[{,", last) != nullptr) {
       quote = c;
     } else if (c == '[' || c == '{') {
       if (++depth > kMaxDepth) throw InputError(name + ": YAML nested too deeply");
     } else if ((c == ']' || c == '}') && depth > 0) {
       --depth;
     }
+    if (!space) last = c;
   }
   std::vector<YAML::Node> documents;
   try {
     documents = YAML::LoadAll(text);
+  } catch (const YAML::DeepRecursion&) {  // yaml-cpp's own guard ("bad file")
+    throw InputError(name + ": YAML nested too deeply");
   } catch (const YAML::Exception& e) {
     throw InputError(name + ":" + std::to_string(e.mark.line + 1) +
                      ": YAML syntax error: " + e.msg);
   }
-  // A second document ('---') was ignored without a word.
-  if (documents.size() > 1) {
-    throw InputError(name + ": holds " + std::to_string(documents.size()) +
-                     " YAML documents (separated by '---'); one is expected");
+  // A second document ('---') was ignored without a word; an empty one (a closing '---') says
+  // nothing.
+  YAML::Node document;
+  int given = 0;
+  for (const YAML::Node& d : documents) {
+    if (d.IsNull()) continue;
+    if (++given > 1)
+      throw InputError(name +
+                       ": holds more than one YAML document (separated by '---'); one is "
+                       "expected");
+    document = d;
   }
-  return documents.empty() ? YAML::Node() : documents.front();
+  return document;
 }
 }  // namespace jpcr

@@ -271,9 +271,9 @@ TEST(PointToPlaneIcp, ASinglePlaneIsDegenerate) {
 
 // Along a direction the geometry does not observe, the gradient is the normals' noise: here the
 // depth's 0.2 mm steps (a PNG at 5000 per metre). The full Gauss-Newton step moved the pose
-// along a corridor by 0.23–0.50 m between frames 2.5 mm apart, and past max_translation the
-// verdict was `diverged` (a failure: every such frame a keyframe); the step now leaves out what
-// is unobserved (observable_step).
+// along the corridor by 8.9 mm in the first pair below; on a 10-frame corridor walk at 160x120
+// 5 of 9 alignments went past max_translation, `diverged` (a failure: each a keyframe). The step
+// now leaves out what is unobserved (observable_step): along the axis the pose keeps the guess.
 TEST(PointToPlaneIcp, UnobservedDirectionsKeepTheInitialGuess) {
   const SyntheticScene& corridor = load_scene("corridor");
   const Eigen::Isometry3d T_wt = test::look_from(corridor.view.eye, corridor.view.target);
@@ -291,10 +291,14 @@ TEST(PointToPlaneIcp, UnobservedDirectionsKeepTheInitialGuess) {
         align_point_to_plane(quantised(T_wt * delta), target, Eigen::Isometry3d::Identity());
     std::printf("corridor, %.4f m: %s, degeneracy %.3g, error %.2f mm\n", along,
                 to_string(r.verdict), r.degeneracy, 1e3 * test::translation_error(r.pose, delta));
+    std::printf("  sideways error %.3f mm, along the axis %.3f mm\n",
+                1e3 * (r.pose.translation().x() - delta.translation().x()),
+                1e3 * r.pose.translation().z());
     EXPECT_EQ(r.verdict, IcpVerdict::degenerate) << along;
-    // The motion along the axis is not observed: the pose keeps the guess's there (0), and
-    // the rest of the motion (2 mm) at most.
-    EXPECT_LT(test::translation_error(r.pose, delta), std::abs(along) + 0.002) << along;
+    // Sideways the walls observe the motion (1.6 mm of it); along the axis nothing does, and
+    // the pose keeps the guess's 0 there (up to the coupling of the observed directions).
+    EXPECT_NEAR(r.pose.translation().x(), delta.translation().x(), 5e-4) << along;
+    EXPECT_NEAR(r.pose.translation().z(), 0.0, 5e-4) << along;
   }
 }
 

@@ -142,11 +142,11 @@ int run(int argc, char** argv) {
                               ? load_params(args.get("params"))
                               : Params{};
     const std::string method = args.get("method");
+    const std::unique_ptr<CurvatureEstimator> estimator =
+        make_estimator(method, params.quadric, cli::device_from(args, params));
     if (args.has("device") && method != "it" && method != "quad-it")
       std::cerr << "jpcr_curvature: warning: --device has no effect: method " << method
                 << " runs on the CPU (only Quad IT has a CUDA kernel)\n";
-    const std::unique_ptr<CurvatureEstimator> estimator =
-        make_estimator(method, params.quadric, cli::device_from(args, params));
     CurvatureColorParams colors;
     colors.scale = static_cast<float>(args.get_double("color-scale"));
     if (!(colors.scale > 0.0f) || !std::isfinite(colors.scale))

@@ -169,9 +169,13 @@ int run(int argc, char** argv) {
     const std::string summary = args.has("summary") ? args.get("summary") : out + ".json";
     // Before the run, so it fails early. Absolute first: weakly_canonical leaves a relative path
     // that does not exist yet relative, so "o.txt" and "./o.txt" compared unequal.
+    // A path that cannot be resolved (a link loop) gives an empty one: compare it as written,
+    // and let the write say what is wrong with it.
     const auto resolved = [](const std::string& file) {
       std::error_code ec;
-      return std::filesystem::weakly_canonical(std::filesystem::absolute(file, ec), ec);
+      const std::filesystem::path absolute = std::filesystem::absolute(file, ec);
+      const std::filesystem::path canonical = std::filesystem::weakly_canonical(absolute, ec);
+      return ec ? absolute.lexically_normal() : canonical;
     };
     if (resolved(out) == resolved(summary))
       throw cli::UsageError("--summary and --out name the same file: " + out);
