@@ -341,6 +341,15 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
                                const Eigen::Isometry3d& initial, const IcpParams& params,
                                RowPool* pool) {
   params.validate();  // a library caller's parameters (a stride of 0 divided by zero)
+  // A library caller's pyramids and guess: iterations are given per level, and the guess is
+  // composed with each step as a rigid motion.
+  if (source.levels.size() > params.iterations.size() ||
+      target.levels.size() > params.iterations.size())
+    throw InputError(
+        "align_point_to_plane: a pyramid has more levels than IcpParams::iterations (" +
+        std::to_string(params.iterations.size()) + ")");
+  if (!is_rigid(initial))
+    throw InputError("align_point_to_plane: the initial guess is not a finite rigid motion");
   IcpResult result;
   result.pose = initial;
   const int levels = std::min<int>(source.levels.size(), target.levels.size());

@@ -38,6 +38,14 @@ TEST(PointToPlaneIcp, RefusesParametersItsValidateRefuses) {
   EXPECT_THROW(align_point_to_plane(pair.source, pair.target, pair.truth, no_stride), InputError);
   EXPECT_THROW(linearize_point_to_plane(pair.source, pair.target, 0, pair.truth, IcpParams{}, 0),
                InputError);
+  // A guess that is no rigid motion, and a pyramid deeper than the iterations are given for
+  // (they were indexed past their end).
+  Eigen::Isometry3d scaled = pair.truth;
+  scaled.linear() *= 2.0;
+  EXPECT_THROW(align_point_to_plane(pair.source, pair.target, scaled, IcpParams{}), InputError);
+  FramePyramid deep = pair.source;
+  deep.levels.push_back(deep.levels.back());
+  EXPECT_THROW(align_point_to_plane(deep, pair.target, pair.truth, IcpParams{}), InputError);
   PreprocessParams no_offset;
   no_offset.normal_offset = 0;
   EXPECT_THROW(preprocess(test::render_at(test::room(), test::room_view()), no_offset), InputError);
