@@ -1,13 +1,16 @@
 #include "jpcr/io/yaml_reader.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <set>
+#include <sstream>
 #include <vector>
 
 #include <yaml-cpp/depthguard.h>
+#include <yaml-cpp/eventhandler.h>
 
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -19,6 +22,65 @@ namespace {
 std::string line_of(const YAML::Node& node) {
   const YAML::Mark mark = node.Mark();
   return mark.is_null() ? "" : std::to_string(mark.line + 1) + ":";
+}
+
+// Counts the documents of a stream that hold something (a closing '---' leaves an empty one).
+// YAML::LoadAll is not used: yaml-cpp 0.7 returns from HandleNextDocument without consuming a
+// stray ',' at the top ("," alone), so LoadAll loops forever, keeping a node per turn. A
+// document starts only at the stream's start or after a '---' or '...' line, so more turns than
+// that are the parser standing still, a syntax error at the mark where it stands.
+class DocumentCounter : public YAML::EventHandler {
+ public:
+  int given = 0;
+  YAML::Mark last;
+  void OnDocumentStart(const YAML::Mark& mark) override {
+    root_ = true;
+    last = mark;
+  }
+  void OnDocumentEnd() override {}
+  void OnNull(const YAML::Mark&, YAML::anchor_t) override { root_ = false; }
+  void OnAlias(const YAML::Mark&, YAML::anchor_t) override { content(); }
+  void OnScalar(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                const std::string&) override {
+    content();
+  }
+  void OnSequenceStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                       YAML::EmitterStyle::value) override {
+    content();
+  }
+  void OnSequenceEnd() override {}
+  void OnMapStart(const YAML::Mark&, const std::string&, YAML::anchor_t,
+                  YAML::EmitterStyle::value) override {
+    content();
+  }
+  void OnMapEnd() override {}
+
+ private:
+  void content() {
+    if (root_) ++given;
+    root_ = false;
+  }
+  bool root_ = false;
+};
+
+int count_documents(const std::string& text) {
+  int markers = 1;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if ((i == 0 || text[i - 1] == '\n') &&
+        (text.compare(i, 3, "---") == 0 || text.compare(i, 3, "...") == 0))
+      ++markers;
+  }
+  std::istringstream stream(text);
+  YAML::Parser parser(stream);
+  DocumentCounter counter;
+  for (int turn = 0; parser.HandleNextDocument(counter); ++turn) {
+    if (turn > markers) {
+      const std::size_t at = std::min<std::size_t>(std::max(counter.last.pos, 0), text.size() - 1);
+      throw YAML::ParserException(counter.last,
+                                  "cannot read past '" + std::string(1, text[at]) + "'");
+    }
+  }
+  return counter.given;
 }
 
 }  // namespace
@@ -216,26 +278,20 @@ YAML::Node parse_yaml(const std::string& text, const std::string& name) {
     }
     if (!space) last = c;
   }
-  std::vector<YAML::Node> documents;
+  YAML::Node document;
   try {
-    documents = YAML::LoadAll(text);
+    document = YAML::Load(text);
+    // A second document ('---') was ignored without a word; an empty one (a closing '---')
+    // says nothing.
+    if (count_documents(text) > 1)
+      throw InputError(name +
+                       ": holds more than one YAML document (separated by '---'); one is "
+                       "expected");
   } catch (const YAML::DeepRecursion&) {  // yaml-cpp's own guard ("bad file")
     throw InputError(name + ": YAML nested too deeply");
   } catch (const YAML::Exception& e) {
     throw InputError(name + ":" + std::to_string(e.mark.line + 1) +
                      ": YAML syntax error: " + e.msg);
-  }
-  // A second document ('---') was ignored without a word; an empty one (a closing '---') says
-  // nothing.
-  YAML::Node document;
-  int given = 0;
-  for (const YAML::Node& d : documents) {
-    if (d.IsNull()) continue;
-    if (++given > 1)
-      throw InputError(name +
-                       ": holds more than one YAML document (separated by '---'); one is "
-                       "expected");
-    document = d;
   }
   return document;
 }

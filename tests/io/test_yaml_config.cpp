@@ -86,6 +86,16 @@ TEST(CameraYaml, ErrorsNameFileLineAndKey) {
             std::string::npos);
   const std::string closed = dir.write("closed.yaml", base + "depth_scale: 5000\n--- # end\n");
   EXPECT_EQ(load_camera_yaml(closed).depth_scale, 5000.0);
+
+  // yaml-cpp's LoadAll never returned on a stray ',' at the top (the parser stands on it), keeping
+  // a node per turn until memory ran out (found by fuzz_yaml_config).
+  for (const std::string& text : {std::string(","), base + "depth_scale: 5000\n---\n,\n"}) {
+    const std::string stray = dir.write("stray.yaml", text);
+    EXPECT_NE(
+        error_of([&] { load_camera_yaml(stray); }).find("YAML syntax error: cannot read past ','"),
+        std::string::npos)
+        << text;
+  }
 }
 
 TEST(CameraYaml, BracketsInCommentsAndQuotesAreNoNesting) {
