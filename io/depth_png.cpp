@@ -58,6 +58,16 @@ bool png_header_size(const std::string& bytes, long long& width, long long& heig
   return true;
 }
 
+// An image's size against the camera's (expected_width 0: any size).
+void check_image_size(const std::string& path, long long width, long long height,
+                      int expected_width, int expected_height) {
+  if (expected_width > 0 && (width != expected_width || height != expected_height)) {
+    throw InputError(path + ": image is " + std::to_string(width) + "x" + std::to_string(height) +
+                     " but the camera is " + std::to_string(expected_width) + "x" +
+                     std::to_string(expected_height));
+  }
+}
+
 // Only PNG and JPEG reach OpenCV: cv::imdecode otherwise tries every codec it was built with, and
 // some (GDCM's DICOM reader) abort the process on malformed input, which fuzzing found.
 cv::Mat decode(const std::string& bytes, const std::string& name, int flags) {
@@ -78,13 +88,6 @@ cv::Mat decode(const std::string& bytes, const std::string& name, int flags) {
   return image;
 }
 
-cv::Mat decode_file(const std::string& path, int flags) {
-  std::error_code ec;
-  if (!std::filesystem::is_regular_file(path, ec)) {
-    throw InputError(path + ": file does not exist");
-  }
-  return decode(read_file(path), path, flags);
-}
 void write_encoded(const std::string& path, const cv::Mat& image) {
   std::vector<unsigned char> encoded;
   if (!cv::imencode(".png", image, encoded)) throw InputError(path + ": PNG encoding failed");
@@ -104,11 +107,7 @@ DepthImage load_depth_png(const std::string& path, double depth_scale, int expec
 DepthImage decode_depth_png(const std::string& bytes, const std::string& path, double depth_scale,
                             int expected_width, int expected_height) {
   const auto check_size = [&](long long width, long long height) {
-    if (expected_width > 0 && (width != expected_width || height != expected_height)) {
-      throw InputError(path + ": image is " + std::to_string(width) + "x" + std::to_string(height) +
-                       " but the camera is " + std::to_string(expected_width) + "x" +
-                       std::to_string(expected_height));
-    }
+    check_image_size(path, width, height, expected_width, expected_height);
   };
   // The header's size first: a small file can declare 16384x16384 (600 MB decoded).
   long long width = 0, height = 0;
@@ -143,8 +142,15 @@ void save_depth_png(const std::string& path, const DepthImage& depth, double dep
   write_encoded(path, raw);
 }
 
-ColorImage load_color_image(const std::string& path) {
-  const cv::Mat bgr = decode_file(path, cv::IMREAD_COLOR);
+ColorImage load_color_image(const std::string& path, int expected_width, int expected_height) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path + ": file does not exist");
+  const std::string bytes = read_file(path);
+  long long width = 0, height = 0;  // the PNG header's size before decoding, as for depth
+  if (png_header_size(bytes, width, height))
+    check_image_size(path, width, height, expected_width, expected_height);
+  const cv::Mat bgr = decode(bytes, path, cv::IMREAD_COLOR);
+  check_image_size(path, bgr.cols, bgr.rows, expected_width, expected_height);
   ColorImage image(bgr.cols, bgr.rows);
   for (int v = 0; v < bgr.rows; ++v) {
     const auto* row = bgr.ptr<cv::Vec3b>(v);

@@ -21,8 +21,10 @@ DepthImage decode_depth_png(const std::string& bytes, const std::string& path, d
 /// out-of-range depths are written as 0 (no measurement).
 void save_depth_png(const std::string& path, const DepthImage& depth, double depth_scale);
 
-/// Loads an 8-bit colour PNG/JPEG as RGB; throws InputError naming the file on failure.
-ColorImage load_color_image(const std::string& path);
+/// Loads an 8-bit colour PNG/JPEG as RGB; throws InputError naming the file on failure, and on a
+/// size other than expected_width x expected_height when those are given (> 0).
+ColorImage load_color_image(const std::string& path, int expected_width = 0,
+                            int expected_height = 0);
 
 /// Writes RGB as PNG, atomically.
 void save_color_png(const std::string& path, const ColorImage& image);

@@ -134,7 +134,8 @@ Frame TumDataset::load(std::size_t index) const {
     frame.camera.distortion = {};  // the depth as delivered is rectified (same K)
   }
   if (options_.load_color && color_[index]) {
-    frame.color = load_color_image((fs::path(directory_) / *color_[index]).string());
+    frame.color = load_color_image((fs::path(directory_) / *color_[index]).string(), camera_.width,
+                                   camera_.height);
   }
   return frame;
 }

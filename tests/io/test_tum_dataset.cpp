@@ -255,6 +255,29 @@ TEST(TumDataset, CorruptAndEightBitPngsAndWrongSize) {
             std::string::npos);
 }
 
+// Colour frames are held to the camera's size too, the PNG header before decoding.
+TEST(TumDataset, ColourOfAnotherSizeIsRefused) {
+  test::TempDir dir;
+  make_sequence(dir, 3);
+  fs::create_directories(dir.file("rgb"));
+  cv::imwrite(dir.file("rgb/0.png"), cv::Mat(6, 8, CV_8UC3, cv::Scalar(1, 2, 3)));
+  cv::imwrite(dir.file("rgb/1.png"), cv::Mat(5, 8, CV_8UC3, cv::Scalar(1, 2, 3)));
+  std::string header("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\x40\0\0\0\x40\0\x08\x02\0\0\0", 29);
+  dir.write("rgb/2.png", header + "truncated");
+  dir.write("rgb.txt", "10.0 rgb/0.png\n11.0 rgb/1.png\n12.0 rgb/2.png\n");
+  TumDatasetOptions options;
+  options.load_color = true;
+  const TumDataset dataset(dir.path(), tiny_camera(), options);
+  const Frame first = dataset.load(0);
+  ASSERT_EQ(first.color.width(), 8);
+  EXPECT_EQ(first.color(0, 0).r, 3);  // BGR on disk, RGB in memory
+  EXPECT_NE(error_of([&] { dataset.load(1); }).find("1.png: image is 8x5 but the camera is 8x6"),
+            std::string::npos);
+  EXPECT_NE(
+      error_of([&] { dataset.load(2); }).find("2.png: image is 16384x16384 but the camera is 8x6"),
+      std::string::npos);
+}
+
 TEST(TumDataset, GroundTruthWithNaNIsRejectedWithLine) {
   test::TempDir dir;
   make_sequence(dir, 2);
