@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include "jpcr/quadric/vertex_map.hpp"
@@ -19,7 +20,7 @@ struct CurvatureErrors {
   double rms_k1 = 0.0;       // 1/m
   double rms_k2 = 0.0;       // 1/m
   double rms = 0.0;          // 1/m, over both κ₁ and κ₂
-  double median_abs = 0.0;   // 1/m, median of |Δκ₁| and |Δκ₂| together
+  double median_abs = 0.0;   // 1/m, median of |Δκ₁| and |Δκ₂| together (to 1e-4 relative)
   double coverage = 0.0;     // compared / ground-truth-valid pixels
   std::size_t compared = 0;  // pixels valid in both
   std::size_t gt_valid = 0;  // pixels with ground truth
@@ -42,7 +43,13 @@ class CurvatureErrorAccumulator {
   int support_radius_ = 0;
   double sum_k1_ = 0.0, sum_k2_ = 0.0;
   std::size_t compared_ = 0, gt_valid_ = 0, frames_ = 0;
-  std::vector<float> abs_errors_;  // for the median
+  // |Δκ| on a logarithmic scale for the median: constant memory however many frames (a list of
+  // every error took 8 bytes a pixel, 2.4 GB for 1000 frames at 640x480). Bin 0 holds errors
+  // below kMedianFloor, bin k ≥ 1 [floor·r^(k−1), floor·r^k) with r = 1 + kMedianStep, the last
+  // also everything above.
+  static constexpr double kMedianFloor = 1e-9, kMedianStep = 1e-4, kMedianCeiling = 1e9;
+  std::vector<std::uint64_t> abs_error_bins_;
+  void add_abs_error(double e);
 };
 
 }  // namespace jpcr

@@ -1,7 +1,9 @@
 // Curvature outputs and metrics: .npy round trip, the binary PLY layout, the colour code and its
 // key, the RMS/coverage figures against a hand-computed case, and the quadric: YAML section.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <random>
 
 #include <gtest/gtest.h>
 
@@ -146,6 +148,36 @@ TEST(CurvatureMetrics, RmsAndCoverageOfAHandComputedCase) {
   EXPECT_NEAR(e.rms_k2, std::sqrt((0.16 + 1.0) / 2), 1e-6);
   EXPECT_NEAR(e.rms, std::sqrt((0.09 + 0.16 + 1.0) / 4), 1e-6);
   EXPECT_THROW(acc.add(gt, CurvatureImage(3, 2, Eigen::Vector2f::Zero())), InputError);
+}
+
+// The median |Δκ| comes from a logarithmic histogram (constant memory): within 1e-4 relative of
+// the exact (n/2)-th smallest error, over errors spread across 12 decades, exact zeros included.
+TEST(CurvatureMetrics, MedianOfTheHistogramIsTheExactMedianTo1e4) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> decade(-8.0, 4.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int w = 31 + trial, h = 17;
+    CurvatureImage gt(w, h, Eigen::Vector2f(0, 0)), est(w, h, Eigen::Vector2f(0, 0));
+    std::vector<double> errors;
+    for (int v = 0; v < h; ++v)
+      for (int u = 0; u < w; ++u) {
+        const bool zero = (u + v + trial) % 11 == 0;
+        est(u, v) = zero ? Eigen::Vector2f(0, 0)
+                         : Eigen::Vector2f(static_cast<float>(std::pow(10.0, decade(rng))),
+                                           -static_cast<float>(std::pow(10.0, decade(rng))));
+        errors.push_back(std::abs(double(est(u, v).x())));
+        errors.push_back(std::abs(double(est(u, v).y())));
+      }
+    CurvatureErrorAccumulator acc;
+    acc.add(gt, est);
+    std::nth_element(errors.begin(), errors.begin() + errors.size() / 2, errors.end());
+    const double exact = errors[errors.size() / 2];
+    EXPECT_NEAR(acc.result().median_abs, exact, 1e-4 * exact) << "trial " << trial;
+  }
+  CurvatureImage gt(4, 1, Eigen::Vector2f(0, 0)), est(4, 1, Eigen::Vector2f(0, 0));
+  CurvatureErrorAccumulator zeros;  // every error 0: the median is 0
+  zeros.add(gt, est);
+  EXPECT_EQ(zeros.result().median_abs, 0.0);
 }
 
 // A 20x12 map with ground truth everywhere but column 9 (a crease) and an estimate that is off by
