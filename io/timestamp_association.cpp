@@ -11,17 +11,19 @@ std::vector<std::pair<std::size_t, std::size_t>> associate_timestamps(const std:
                                                                       double max_difference) {
   // Candidates within the window; b is sorted through an index so the window search is a
   // binary search instead of the O(|a||b|) loop of associate.py (same result).
-  std::vector<std::size_t> order_b(b.size());
+  // A stamp that is not finite matches nothing (a NaN in the sort broke its ordering).
+  std::vector<std::size_t> order_b;
   for (std::size_t j = 0; j < b.size(); ++j)
-    order_b[j] = j;
+    if (std::isfinite(b[j])) order_b.push_back(j);
   std::sort(order_b.begin(), order_b.end(),
             [&](std::size_t x, std::size_t y) { return b[x] < b[y]; });
-  std::vector<double> sorted_b(b.size());
-  for (std::size_t k = 0; k < b.size(); ++k)
+  std::vector<double> sorted_b(order_b.size());
+  for (std::size_t k = 0; k < order_b.size(); ++k)
     sorted_b[k] = b[order_b[k]];
 
   std::vector<std::tuple<double, std::size_t, std::size_t>> candidates;
   for (std::size_t i = 0; i < a.size(); ++i) {
+    if (!std::isfinite(a[i])) continue;
     auto lo = std::lower_bound(sorted_b.begin(), sorted_b.end(), a[i] - max_difference);
     for (auto it = lo; it != sorted_b.end() && *it <= a[i] + max_difference; ++it) {
       const double diff = std::abs(a[i] - *it);

@@ -9,7 +9,8 @@
 
 namespace jpcr {
 
-/// Returns index pairs (i into a, j into b), sorted by i. a and b need not be sorted.
+/// Returns index pairs (i into a, j into b), sorted by i. a and b need not be sorted; a stamp
+/// that is not finite matches nothing.
 std::vector<std::pair<std::size_t, std::size_t>> associate_timestamps(const std::vector<double>& a,
                                                                       const std::vector<double>& b,
                                                                       double max_difference);

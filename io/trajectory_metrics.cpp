@@ -167,8 +167,11 @@ RelativeErrors compute_relative_errors(const Trajectory& ground_truth_in,
   return result;
 }
 
-DriftCurve compute_drift(const Trajectory& ground_truth, const Trajectory& estimate,
+DriftCurve compute_drift(const Trajectory& ground_truth_in, const Trajectory& estimate_in,
                          double max_difference) {
+  // The distance travelled is summed in time order, whatever order a library caller gives.
+  const Trajectory ground_truth = sorted_by_time(ground_truth_in);
+  const Trajectory estimate = sorted_by_time(estimate_in);
   const auto matches =
       associate_timestamps(stamps_of(ground_truth), stamps_of(estimate), max_difference);
   DriftCurve drift;

@@ -145,6 +145,24 @@ TEST(Metrics, DriftGrowsLinearlyWithConstantStepError) {
   EXPECT_NEAR(drift.translation[50], 0.005, 1e-12);
 }
 
+// The distance is summed in time order: a library caller's unsorted ground truth (two poses
+// swapped) gave 2.5 m for a 0.9 m path.
+TEST(Metrics, DriftSumsTheDistanceInTimeOrder) {
+  Trajectory gt, est;
+  for (int i = 0; i < 10; ++i) {
+    StampedPose p;
+    p.timestamp = i * 0.1;
+    p.pose.translation() = Eigen::Vector3d(0.1 * i, 0, 0);
+    gt.push_back(p);
+    p.pose.translation() = Eigen::Vector3d(0.101 * i, 0, 0);
+    est.push_back(p);
+  }
+  std::swap(gt[2], gt[7]);
+  const DriftCurve drift = compute_drift(gt, est);
+  EXPECT_NEAR(drift.distance.back(), 0.9, 1e-12);
+  EXPECT_NEAR(drift.translation_per_metre, 0.01, 1e-12);
+}
+
 TEST(Metrics, TooFewAssociationsIsAnError) {
   const Trajectory gt = make_trajectory(5);
   Trajectory est = gt;

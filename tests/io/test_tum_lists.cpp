@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -143,6 +144,16 @@ TEST(Association, EachTimestampUsedOnce) {
   const auto m = associate_timestamps({1.0, 1.01}, {1.004}, 0.02);
   ASSERT_EQ(m.size(), 1u);
   EXPECT_EQ(m[0].first, 0u);  // 0.004 beats 0.006
+}
+
+// A NaN stamp made the sort's ordering invalid and lost valid matches (2-2 here); it matches
+// nothing.
+TEST(Association, StampsThatAreNotFiniteMatchNothing) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto m = associate_timestamps({1.0, nan, 2.0, 3.0}, {1.0, nan, 2.0, 3.0}, 0.02);
+  ASSERT_EQ(m.size(), 3u);
+  EXPECT_EQ(m[1], std::make_pair(std::size_t{2}, std::size_t{2}));
+  EXPECT_EQ(m[2], std::make_pair(std::size_t{3}, std::size_t{3}));
 }
 
 TEST(Association, ClosestIndex) {

@@ -131,6 +131,17 @@ d[start:start + 8 * 100] = struct.pack("<f", float("inf")) * 200  # 100 pixels o
 open(sys.argv[2], "wb").write(d)
 PY
 expect 0 "warning: 100 pixels of .*inf are +-Inf" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/inf"
+# A map of another size than its ground truth: both files named (plain python3, no numpy).
+mkdir -p "$tmp/small/curvature"
+python3 - "$tmp/small/curvature/0.000000.npy" <<'PY'
+import sys
+header = "{'descr': '<f4', 'fortran_order': False, 'shape': (4, 5, 2), }"
+header += " " * (63 - (10 + len(header)) % 64) + "\n"
+data = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + bytes(160)
+open(sys.argv[1], "wb").write(data)
+PY
+expect 1 "small/curvature/0.000000.npy: the map is 5x4 but its ground truth .*seq/curvature/0.000000.npy is" -- \
+  "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/small"
 # A map whose stamp has no ground truth is not compared, and said so.
 cp "$tmp/inf/curvature/0.000000.npy" "$tmp/inf/curvature/99.000000.npy"
 expect 0 "warning: 1 of 2 maps of .*inf have no ground truth of their stamp" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/inf"

@@ -114,11 +114,17 @@ int run_curvature(int argc, char** argv) {
         continue;
       }
       const std::string name = "curvature/" + stamp + ".npy";
-      const CurvatureImage truth = read_curvature_npy((fs::path(args.get("gt")) / name).string());
+      const std::string gt_file = (fs::path(args.get("gt")) / name).string();
+      const CurvatureImage truth = read_curvature_npy(gt_file);
       if (!acc) acc.emplace(support_radius(support, truth.width()));
       const std::string est_file = (fs::path(args.get("est")) / name).string();
       try {
         const CurvatureImage estimate = read_curvature_npy(est_file);
+        if (estimate.width() != truth.width() || estimate.height() != truth.height())
+          throw InputError(est_file + ": the map is " + std::to_string(estimate.width()) + "x" +
+                           std::to_string(estimate.height()) + " but its ground truth " + gt_file +
+                           " is " + std::to_string(truth.width()) + "x" +
+                           std::to_string(truth.height()));
         for (const Eigen::Vector2f& k : estimate) {
           infinite += k.array().isInf().any() ? 1 : 0;
           unordered += k.x() < k.y() ? 1 : 0;  // false with a NaN
