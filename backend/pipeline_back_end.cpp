@@ -20,28 +20,44 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-// A refinement whose poses can be used: converged, or still improving at the iteration cap.
+// A refinement whose poses can be used: converged, or still improving at the iteration cap
+// (refine_or_report has checked the poses).
 bool usable(const RefinementResult& r) {
-  if (!usable(r.report.verdict)) return false;
-  for (const Eigen::Isometry3d& T : r.poses)
-    if (!T.matrix().allFinite()) return false;
-  return true;
+  return usable(r.report.verdict);
+}
+
+RefinementResult failed(const Refiner& refiner, const std::string& why) {
+  RefinementResult r;
+  r.report.method = refiner.name();
+  r.report.verdict = RefinementVerdict::kError;
+  r.report.error = why;
+  r.report.device.clear();  // unknown: a GPU refiner's non-device error reaches here too
+  return r;
 }
 
 // A refiner that throws (out of memory, a device error) gives a failed refinement that says why,
-// so that the run goes on with the front end's motion as after any other failed refinement.
+// so that the run goes on with the front end's motion as after any other failed refinement. So
+// does a refiner (a library caller's, through RefinerFactory) that says it converged but gives
+// another number of poses than frames, or one that is no rigid motion: its report would say
+// "converged" of poses the pipeline cannot use.
 RefinementResult refine_or_report(const Refiner& refiner, const std::vector<Frame>& frames,
                                   const std::vector<Eigen::Isometry3d>& initial) {
+  RefinementResult r;
   try {
-    return refiner.refine(frames, initial);
+    r = refiner.refine(frames, initial);
   } catch (const std::exception& e) {
-    RefinementResult r;
-    r.report.method = refiner.name();
-    r.report.verdict = RefinementVerdict::kError;
-    r.report.error = e.what();
-    r.report.device.clear();  // unknown: a GPU refiner's non-device error reaches here too
-    return r;
+    return failed(refiner, e.what());
+  } catch (...) {
+    return failed(refiner, "the refiner threw an exception that is no std::exception");
   }
+  if (!usable(r.report.verdict)) return r;
+  if (r.poses.size() != frames.size())
+    return failed(refiner, "the refiner gave " + std::to_string(r.poses.size()) + " poses for " +
+                               std::to_string(frames.size()) + " frames");
+  for (std::size_t j = 0; j < r.poses.size(); ++j)
+    if (!is_rigid(r.poses[j]))
+      return failed(refiner, "the refiner's pose " + std::to_string(j) + " is no rigid motion");
+  return r;
 }
 
 // Keyframe poses are chains of compositions, and each window composes its first pose with the
@@ -138,13 +154,19 @@ const PipelineFrame& PipelineBackEnd::add(const PipelineFrame& tracked, const Fr
     throw InputError("frame " + std::to_string(tracked.index) + " arrived as frame " +
                      std::to_string(frame_count()) + " (frames lost or reordered)");
   if (!keyframe && keyframe_count() == 0) throw InputError("the first frame must be a keyframe");
+  // Each keyframe's pose builds on the previous one's: one pose that is not rigid (NaN) would
+  // spoil every later keyframe.
+  if (!is_rigid(tracked.front_end.pose))
+    throw InputError(
+        "frame " + std::to_string(tracked.index) +
+        ": the front end's pose is no rigid motion (finite, R orthonormal, det R = 1)");
   // Every keyframe must come from the first one's camera, checked before anything changes.
   if (keyframe && keyframe_camera_ && !same_pinhole(keyframe->camera, *keyframe_camera_))
     throw InputError("keyframe of frame " + std::to_string(tracked.index) + ": camera " +
                      describe(keyframe->camera) + " differs from the first keyframe's, " +
                      describe(*keyframe_camera_));
-  if (keyframe && !keyframe_camera_) keyframe_camera_ = keyframe->camera;
   if (keyframe) on_keyframe(*keyframe, tracked);
+  if (keyframe && !keyframe_camera_) keyframe_camera_ = keyframe->camera;
   frames_.push_back(tracked);
   frames_.back().keyframe = static_cast<int>(keyframe_count()) - 1;
   emit_final_frames();
@@ -220,6 +242,15 @@ void PipelineBackEnd::forget_emitted() {
 }
 
 void PipelineBackEnd::on_keyframe(const Frame& frame, const PipelineFrame& tracked) {
+  // What can throw (the copy, the filter: out of memory) comes before anything changes, so that
+  // add() leaves the back end as it was; the refiners and sinks report rather than throw.
+  const bool refines = pair_refiner_ || window_refiner_;
+  Frame held;
+  if (refines) {
+    held = frame;
+    if (params_.filtered_depth)
+      held.depth = bilateral_filter(frame.depth, params_.frontend.preprocess);
+  }
   PipelineKeyframe k;
   k.frame = tracked.index;
   k.front_end = k.refined = tracked.front_end;
@@ -230,14 +261,14 @@ void PipelineBackEnd::on_keyframe(const Frame& frame, const PipelineFrame& track
     k.refined.pose =
         rigid(previous.refined.pose * (previous.front_end.pose.inverse() * tracked.front_end.pose));
   }
+  // ICP-ftf: nothing refines a keyframe; every one but the gauge is the front end's motion.
+  k.used_front_end = !refines && !keyframes_.empty();
   keyframes_.push_back(k);
   // Without windows a keyframe's pose is final once its pair ran (below); with windows, once its
   // window did (refine_window). The first keyframe is the gauge.
   if (!window_refiner_ || keyframe_count() == 1) final_keyframes_ = keyframe_count();
-  if (!pair_refiner_ && !window_refiner_) return;  // ICP-ftf: nothing to refine or keep
-  window_->frames.push_back(frame);
-  if (params_.filtered_depth)
-    window_->frames.back().depth = bilateral_filter(frame.depth, params_.frontend.preprocess);
+  if (!refines) return;  // ICP-ftf: nothing to refine or keep
+  window_->frames.push_back(std::move(held));
   window_->keyframes.push_back(static_cast<int>(keyframe_count()) - 1);
   window_->quadrics.emplace_back();
   window_->sources.emplace_back();

@@ -102,7 +102,8 @@ struct PipelineKeyframe {
   /// J-full / Q-full of the window this keyframe is the last frame of.
   std::optional<RefinementReport> window;
   /// No refinement that covers the keyframe succeeded, so its pose is the front end's motion
-  /// from the previous keyframe (after a failed J-ftf, a J-full window can still move it).
+  /// from the previous keyframe (after a failed J-ftf, a J-full window can still move it). With
+  /// ICP-ftf alone (no refiner) every keyframe but the first.
   bool used_front_end = false;
   double refine_ms = 0.0;
   /// Whose quadrics gave the keyframe's curvature map: the refiner's name ("j-ftf", "j-full"),
@@ -123,7 +124,10 @@ struct FrameVerdicts {
   std::optional<RefinementVerdict> window;
 
   /// The front end is ok and every refinement that ran converged or hit max_iterations (the
-  /// results the pipeline uses).
+  /// results the pipeline uses). A frame between keyframes k and k+1 also moves towards k+1's
+  /// correction (PipelineParams::interpolate_corrections); those verdicts are k+1's own line. A
+  /// failed refinement of k+1 moves nothing: k+1 then keeps the front end's motion from k, whose
+  /// correction is k's.
   bool trusted() const;
 };
 

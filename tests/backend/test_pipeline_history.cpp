@@ -4,6 +4,7 @@
 // move the poses by fixed offsets, so that every refinement changes what it touches and the test
 // runs in milliseconds (under AddressSanitizer too).
 #include <algorithm>
+#include <cmath>
 #include <new>
 #include <stdexcept>
 #include <string>
@@ -96,10 +97,12 @@ class RecordingRefiner : public WrappingRefiner {
 };
 
 // Fails the calls (counted from 0) listed in `fails`: with a failed verdict and the initial
-// poses, or by throwing as a refiner out of memory or device does.
+// poses, or by throwing as a refiner out of memory or device does; or (a library caller's broken
+// refiner) says it converged with one pose too few, or with a pose that is not finite, or throws
+// what is no std::exception.
 class FailingRefiner : public WrappingRefiner {
  public:
-  enum class How { kVerdict, kThrow };
+  enum class How { kVerdict, kThrow, kThrowOther, kTooFewPoses, kNanPose };
   FailingRefiner(std::unique_ptr<Refiner> inner, std::vector<int> fails, How how)
       : WrappingRefiner(std::move(inner)), fails_(std::move(fails)), how_(how) {}
   RefinementResult refine(const std::vector<Frame>& frames,
@@ -107,10 +110,16 @@ class FailingRefiner : public WrappingRefiner {
     if (std::find(fails_.begin(), fails_.end(), calls_++) == fails_.end())
       return WrappingRefiner::refine(frames, initial);
     if (how_ == How::kThrow) throw std::runtime_error("device lost");
+    if (how_ == How::kThrowOther) throw 42;
     RefinementResult r;
     r.report.method = name();
     r.report.verdict = RefinementVerdict::kDiverged;
     r.poses = initial;
+    if (how_ == How::kTooFewPoses || how_ == How::kNanPose) {
+      r = WrappingRefiner::refine(frames, initial);
+      if (how_ == How::kTooFewPoses) r.poses.pop_back();
+      if (how_ == How::kNanPose) r.poses.back().translation().x() = std::nan("");
+    }
     return r;
   }
   using WrappingRefiner::refine;
@@ -390,6 +399,62 @@ TEST(PipelineHistory, ARefinerThatThrowsIsAFailedRefinementAndTheRunGoesOn) {
   }
 }
 
+// A library caller's refiner that says "converged" of poses the pipeline cannot use (one too
+// few: read past the end; one not finite) or throws what is no std::exception is a failed
+// refinement that says why, as one that throws: the keyframe keeps the front end's motion.
+TEST(PipelineHistory, ARefinerWhosePosesCannotBeUsedIsAFailedRefinement) {
+  using How = FailingRefiner::How;
+  for (const auto& [how, why] :
+       {std::pair{How::kTooFewPoses, "the refiner gave 1 poses for 2 frames"},
+        std::pair{How::kNanPose, "the refiner's pose 1 is no rigid motion"},
+        std::pair{How::kThrowOther, "an exception that is no std::exception"}}) {
+    PipelineParams p;
+    p.method = PipelineMethod::kJointFtf;
+    PipelineBackEnd back_end(p, CurvatureSink{}, failing({1}, {}, how));
+    const Frame keyframe;
+    for (int k = 0; k < 4; ++k)
+      back_end.add(walk_frame(k), &keyframe);
+    back_end.finish();
+    const PipelineKeyframe& failed = back_end.keyframe(2);
+    ASSERT_TRUE(failed.pair.has_value()) << why;
+    EXPECT_EQ(failed.pair->verdict, RefinementVerdict::kError) << why;
+    EXPECT_NE(failed.pair->error.find(why), std::string::npos) << failed.pair->error;
+    EXPECT_TRUE(failed.used_front_end) << why;
+    EXPECT_FALSE(back_end.verdicts(2).trusted()) << why;
+    EXPECT_LT(correction(back_end, 2).norm(), 1e-12) << why;
+    EXPECT_NEAR(correction(back_end, 3).x(), 1e-3, 1e-12) << why;  // the next pair as usual
+    for (std::size_t i = 0; i < 4; ++i)
+      EXPECT_TRUE(back_end.refined_pose(i).pose.matrix().allFinite()) << why << ", frame " << i;
+  }
+}
+
+// A front-end pose that is no rigid motion (NaN) is refused before anything changes: each
+// keyframe's pose builds on the previous one's, so one NaN spoiled every later keyframe.
+TEST(PipelineHistory, AFrontEndPoseThatIsNoRigidMotionIsRefused) {
+  PipelineParams p;
+  p.method = PipelineMethod::kPipeline;
+  p.window = 3;
+  PipelineBackEnd back_end(p, CurvatureSink{}, shifting);
+  const Frame keyframe;
+  back_end.add(walk_frame(0), &keyframe);
+  back_end.add(walk_frame(1), &keyframe);
+  PipelineFrame bad = walk_frame(2);
+  bad.front_end.pose.translation().x() = std::nan("");
+  const std::string error = test::input_error_of([&] { back_end.add(bad, &keyframe); });
+  EXPECT_NE(error.find("frame 2: the front end's pose is no rigid motion"), std::string::npos)
+      << error;
+  bad = walk_frame(2);
+  bad.front_end.pose.linear() *= 1.01;  // not orthonormal
+  EXPECT_THROW(back_end.add(bad, nullptr), InputError);
+  EXPECT_EQ(back_end.frame_count(), 2u);
+  EXPECT_EQ(back_end.keyframe_count(), 2u);
+  back_end.add(walk_frame(2), &keyframe);  // completes the window of 3
+  back_end.finish();
+  for (std::size_t k = 0; k < 3; ++k)
+    EXPECT_TRUE(back_end.keyframe(k).refined.pose.matrix().allFinite()) << k;
+  EXPECT_EQ(back_end.keyframe(2).window->verdict, RefinementVerdict::kConverged);
+}
+
 // A keyframe from another camera (the split back end takes keyframes over DDS) is refused before
 // the back end changes: the same frame from the right camera is then taken as usual.
 TEST(PipelineHistory, AKeyframeFromAnotherCameraIsRefusedAndTheBackEndStaysAsItWas) {
@@ -478,6 +543,16 @@ TEST(PipelineHistory, UsedFrontEndSaysWhetherNoRefinementMovedTheKeyframe) {
     EXPECT_EQ(b.keyframe(2).window->verdict, RefinementVerdict::kDiverged);
     EXPECT_FALSE(b.keyframe(2).used_front_end);
     EXPECT_NEAR(correction(b, 2).x(), 1e-3, 1e-12);
+  }
+  {  // ICP-ftf alone: nothing refines, every keyframe after the gauge is the front end's motion
+    p.method = PipelineMethod::kIcpFtf;
+    PipelineBackEnd b(p, CurvatureSink{}, shifting);
+    for (int k = 0; k < 3; ++k)
+      b.add(walk_frame(k), &keyframe);
+    b.finish();
+    EXPECT_FALSE(b.keyframe(0).used_front_end);
+    EXPECT_TRUE(b.keyframe(1).used_front_end);
+    EXPECT_TRUE(b.keyframe(2).used_front_end);
   }
   {  // J-full alone: a failed window leaves every keyframe after its gauge on the front end
     p.method = PipelineMethod::kJointFull;

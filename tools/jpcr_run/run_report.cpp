@@ -199,6 +199,8 @@ void write_verdicts(std::ostream& out, const KeyframePipeline& p) {
          "# pair: J-ftf of the frame's keyframe, window: J-full/Q-full/ICP-bundle that refined\n"
          "#   it last, converged | max_iterations | diverged | too_few_quadrics | no_overlap |\n"
          "#   degenerate | error (the refiner threw; report.json says what) | - (did not run)\n"
+         "#   (a frame between two keyframes also moves towards the next one's correction:\n"
+         "#   those verdicts are on the next keyframe's line; a failed one moves nothing)\n"
          "# trusted: yes when front_end is ok and every refinement converged or hit "
          "max_iterations\n";
   const auto refinement = [](const std::optional<RefinementVerdict>& v) {
