@@ -20,7 +20,8 @@ struct CurvatureErrors {
   double rms_k1 = 0.0;       // 1/m
   double rms_k2 = 0.0;       // 1/m
   double rms = 0.0;          // 1/m, over both κ₁ and κ₂
-  double median_abs = 0.0;   // 1/m, median of |Δκ₁| and |Δκ₂| together (to 1e-4 relative)
+  double median_abs = 0.0;   // 1/m, median of |Δκ₁| and |Δκ₂| together, to 1e-4 relative
+                             // between 1e-9 (0 below) and 1e9 (1e9 above)
   double coverage = 0.0;     // compared / ground-truth-valid pixels
   std::size_t compared = 0;  // pixels valid in both
   std::size_t gt_valid = 0;  // pixels with ground truth

@@ -22,7 +22,8 @@ DepthImage decode_depth_png(const std::string& bytes, const std::string& path, d
 void save_depth_png(const std::string& path, const DepthImage& depth, double depth_scale);
 
 /// Loads an 8-bit colour PNG/JPEG as RGB; throws InputError naming the file on failure, and on a
-/// size other than expected_width x expected_height when those are given (> 0).
+/// size other than expected_width x expected_height when those are given (> 0): for a PNG from
+/// its header before decoding, for a JPEG after.
 ColorImage load_color_image(const std::string& path, int expected_width = 0,
                             int expected_height = 0);
 

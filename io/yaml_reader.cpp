@@ -24,11 +24,12 @@ std::string line_of(const YAML::Node& node) {
   return mark.is_null() ? "" : std::to_string(mark.line + 1) + ":";
 }
 
-// Counts the documents of a stream that hold something (a closing '---' leaves an empty one).
-// YAML::LoadAll is not used: yaml-cpp 0.7 returns from HandleNextDocument without consuming a
-// stray ',' at the top ("," alone), so LoadAll loops forever, keeping a node per turn. A
-// document starts only at the stream's start or after a '---' or '...' line, so more turns than
-// that are the parser standing still, a syntax error at the mark where it stands.
+// Counts the documents of a stream that hold something (a closing '---' leaves an empty one),
+// and proves that the parser gets through the stream: yaml-cpp 0.7 returns from
+// HandleNextDocument without consuming a stray ',' at the top ("," alone), so YAML::LoadAll
+// looped forever on such text, keeping a node per turn. A document starts only at a line's
+// start, so more turns than lines are the parser standing still: a syntax error at the mark
+// where it stands. (Lines are counted in bytes, '\n' or '\r', which holds for UTF-16 too.)
 class DocumentCounter : public YAML::EventHandler {
  public:
   int given = 0;
@@ -64,21 +65,17 @@ class DocumentCounter : public YAML::EventHandler {
 };
 
 int count_documents(const std::string& text) {
-  int markers = 1;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    if ((i == 0 || text[i - 1] == '\n') &&
-        (text.compare(i, 3, "---") == 0 || text.compare(i, 3, "...") == 0))
-      ++markers;
-  }
+  const std::size_t lines =
+      1 + static_cast<std::size_t>(std::count_if(text.begin(), text.end(),
+                                                 [](char c) { return c == '\n' || c == '\r'; }));
   std::istringstream stream(text);
   YAML::Parser parser(stream);
   DocumentCounter counter;
-  for (int turn = 0; parser.HandleNextDocument(counter); ++turn) {
-    if (turn > markers) {
-      const std::size_t at = std::min<std::size_t>(std::max(counter.last.pos, 0), text.size() - 1);
-      throw YAML::ParserException(counter.last,
-                                  "cannot read past '" + std::string(1, text[at]) + "'");
-    }
+  for (std::size_t turn = 0; parser.HandleNextDocument(counter); ++turn) {
+    if (turn > lines)
+      throw YAML::ParserException(counter.last, "cannot read past column " +
+                                                    std::to_string(counter.last.column + 1) +
+                                                    " (a stray ',' or ']'?)");
   }
   return counter.given;
 }
@@ -280,13 +277,14 @@ YAML::Node parse_yaml(const std::string& text, const std::string& name) {
   }
   YAML::Node document;
   try {
-    document = YAML::Load(text);
-    // A second document ('---') was ignored without a word; an empty one (a closing '---')
-    // says nothing.
+    // A second document ('---') was ignored without a word; an empty one (a closing '---', or
+    // one before the content) says nothing.
     if (count_documents(text) > 1)
       throw InputError(name +
                        ": holds more than one YAML document (separated by '---'); one is "
                        "expected");
+    for (const YAML::Node& d : YAML::LoadAll(text))  // ends: count_documents got through
+      if (!d.IsNull()) document = d;
   } catch (const YAML::DeepRecursion&) {  // yaml-cpp's own guard ("bad file")
     throw InputError(name + ": YAML nested too deeply");
   } catch (const YAML::Exception& e) {

@@ -89,13 +89,20 @@ TEST(CameraYaml, ErrorsNameFileLineAndKey) {
 
   // yaml-cpp's LoadAll never returned on a stray ',' at the top (the parser stands on it), keeping
   // a node per turn until memory ran out (found by fuzz_yaml_config).
-  for (const std::string& text : {std::string(","), base + "depth_scale: 5000\n---\n,\n"}) {
-    const std::string stray = dir.write("stray.yaml", text);
-    EXPECT_NE(
-        error_of([&] { load_camera_yaml(stray); }).find("YAML syntax error: cannot read past ','"),
-        std::string::npos)
-        << text;
-  }
+  EXPECT_NE(error_of([&] {
+              load_camera_yaml(dir.write("stray.yaml", ","));
+            }).find("stray.yaml:1: YAML syntax error: cannot read past column 1"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] {
+              load_camera_yaml(dir.write("stray.yaml", base + "depth_scale: 5000\n---\n  ,\n"));
+            }).find("stray.yaml:9: YAML syntax error: cannot read past column 3"),
+            std::string::npos);
+  // Empty documents before the content are no second document, and the content is read.
+  for (const std::string head : {"---\n---\n", "...\n", "--- # header\n---\n", "~\n---\n"})
+    EXPECT_EQ(
+        load_camera_yaml(dir.write("lead.yaml", head + base + "depth_scale: 5000\n")).depth_scale,
+        5000.0)
+        << head;
 }
 
 TEST(CameraYaml, BracketsInCommentsAndQuotesAreNoNesting) {
