@@ -242,8 +242,9 @@ void PipelineBackEnd::forget_emitted() {
 }
 
 void PipelineBackEnd::on_keyframe(const Frame& frame, const PipelineFrame& tracked) {
-  // What can throw (the copy, the filter: out of memory) comes before anything changes, so that
-  // add() leaves the back end as it was; the refiners and sinks report rather than throw.
+  // The work that can throw (the copy, the filter) comes before anything changes, so that add()
+  // leaves the back end as it was when it does; the refiners and sinks report rather than throw
+  // (only an allocation of the bookkeeping below could still fail half-way).
   const bool refines = pair_refiner_ || window_refiner_;
   Frame held;
   if (refines) {

@@ -153,10 +153,12 @@ class PipelineBackEnd {
   /// Appends the next tracked frame (`tracked.index` = frames().size(); its `keyframe` field is
   /// set here). `keyframe` is the frame's depth when the front end made it a keyframe (the first
   /// frame always is), else null; a keyframe is refined when it completes a pair or a window.
-  /// Throws InputError, with nothing changed, for a frame out of order and for a keyframe whose
-  /// camera differs from the first keyframe's; std::logic_error after finish(). A refiner that
-  /// throws does not reach the caller: the refinement's verdict is kError and the keyframe keeps
-  /// the front end's motion. A sink (CurvatureSink, FrameSink) that throws: the frame is added
+  /// Throws InputError, with nothing changed, for a frame out of order, a front-end pose that is
+  /// no rigid motion (finite, R orthonormal to 1e-6) and a keyframe whose camera differs from the
+  /// first keyframe's; std::logic_error after finish(). A refiner that throws does not reach the
+  /// caller: the refinement's verdict is kError and the keyframe keeps the front end's motion;
+  /// so does one that says it converged with another number of poses than frames or a pose
+  /// that is no rigid motion. A sink (CurvatureSink, FrameSink) that throws: the frame is added
   /// and the call completes (later sinks still run), then the first sink exception reaches the
   /// caller; what that sink was handed is not handed again. The same holds for finish() and
   /// set_frame_sink(). Runs the refinements in the calling thread: a J-full window takes
