@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Regenerates the paper's evaluation (issue 10) from nothing: synthetic scenes × range noise for
-# the pose tables (I–III) and the curvature comparison (Fig. 6), Kinect-like noise (not in the
-# paper), a rail drift sequence (Fig. 5), the real TUM frames with the OpenCV peer, curvature
+# the pose tables (I–III) and the curvature comparison (Fig. 7), Kinect-like noise (not in the
+# paper), a rail drift sequence (Fig. 6), the real TUM frames with the OpenCV peer, curvature
 # pictures (Fig. 1), timings, and a self-contained report (index.md + PNG figures).
 #
 #   tools/reproduce.sh [--quick] [--out DIR] [--tum DIR] [--camera CAM.yaml] [--build DIR] [--no-build]
