@@ -159,12 +159,12 @@ for scene in room_spheres cylinders_boxes torus_saddle; do
       say "$scene noise $k %: $m ($(( $(date +%s) - start )) s)"
       run_method "$seq" "$m" "$params" "$cell/$m"
     done
-    # Not the paper's: J-ftf and J-full on the depth after the front end's bilateral filter
-    # (pipeline.filtered_depth), the depth ICP-ftf tracks.
+    # Not the paper's: J-ftf, J-full and ICP-bundle on the depth after the front end's bilateral
+    # filter (pipeline.filtered_depth), the depth ICP-ftf tracks.
     if [[ $k != 0 ]]; then
       filtered=$runs/params_pose_range${k}_filtered.yaml
       { cat "$params"; printf 'pipeline:\n  filtered_depth: true\n'; } > "$filtered"
-      for m in j-ftf j-full; do
+      for m in j-ftf j-full icp-bundle; do
         say "$scene noise $k %: $m on filtered depth ($(( $(date +%s) - start )) s)"
         run_method "$seq" "$m" "$filtered" "$cell/$m-filtered"
       done

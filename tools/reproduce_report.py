@@ -31,13 +31,14 @@ CELL_RUNS = [f"{method}_{scene}_range{k}" for k in (1, 2, 3) for scene in SCENES
              for method in ("icp-ftf", "j-ftf", "j-ftf-filtered")]
 POSE_METHODS = ["icp-ftf", "icp-bundle", "q-full", "j-ftf", "j-full"]
 # Not the paper's: the joint refiners on the bilateral-filtered depth (pipeline.filtered_depth).
-FILTERED_METHODS = ["j-ftf-filtered", "j-full-filtered"]
+FILTERED_METHODS = ["j-ftf-filtered", "j-full-filtered", "icp-bundle-filtered"]
 CURVATURE_METHODS = ["quad_ls", "quad_it", "j-ftf", "j-full"]
 CURVATURE_COLUMNS = CURVATURE_METHODS + ["quad_jet"]  # and the peer: CGAL Monge jet fitting
 LABEL = {"icp-ftf": "ICP-ftf", "icp-bundle": "ICP-bundle", "q-full": "Q-full", "j-ftf": "J-ftf",
          "j-full": "J-full", "quad_ls": "Quad LS", "quad_it": "Quad IT", "pipeline": "pipeline",
          "quad_jet": "CGAL jet (peer)", "j-ftf-filtered": "J-ftf, filtered depth",
-         "j-full-filtered": "J-full, filtered depth"}
+         "j-full-filtered": "J-full, filtered depth",
+         "icp-bundle-filtered": "ICP-bundle, filtered depth"}
 
 # The paper's Tables I-III (synthetic Datasets 1-3): RMS translation (m) and rotation (rad) per
 # noise level 0..3 % and method (ICP-ftf, ICP-bundle, Q-full, J-ftf, J-full). Our scenes are not
@@ -67,6 +68,22 @@ def load_json(path):
             return json.load(f)
     except (OSError, ValueError):
         return None
+
+
+def filtered_revisions(a, methods):
+    """', made at revision X' for filtered-depth runs made at another revision than the report's
+    run (a column added to an earlier run), else ''."""
+    revs = set()
+    for s in SCENES:
+        for k in NOISES:
+            for m in methods:
+                f = os.path.join(a.runs, s, f"range{k}", m, "revision")
+                if os.path.exists(f):
+                    revs.add((m, open(f).read().strip()))
+    other = sorted({(m, r) for m, r in revs if r != a.revision})
+    if not other:
+        return ""
+    return "; " + ", ".join(f"{LABEL[m]} at revision `{r}`" for m, r in other)
 
 
 def noise_rules(runs):
@@ -398,9 +415,10 @@ def main():
         w("At k > 0 ICP-ftf tracks the depth after a bilateral filter matched to the noise (its "
           "normals are noise without it: it rejects every alignment at 2 % and 3 %), and every "
           "other method starts from it. The paper's methods refine the raw depth; the columns "
-          "'filtered depth' (not in the paper) are J-ftf and J-full refining the same filtered "
-          "depth as ICP-ftf (`pipeline.filtered_depth`, README \"Range noise\").\n")
-    ratios_ftf, ratios_bundle, ratios_filtered = [], [], []
+          "'filtered depth' (not in the paper) are the refiners on the same filtered "
+          "depth as ICP-ftf (`pipeline.filtered_depth`, README \"Range noise\")"
+          + filtered_revisions(a, filtered) + ".\n")
+    ratios_ftf, ratios_bundle, ratios_filtered, ratios_bundle_filtered = [], [], [], []
     for i, s in enumerate(SCENES):
         paper = PAPER[f"Dataset {i + 1}"]
         for kind, unit in [("t", "translation (m)"), ("r", "rotation (rad)")]:
@@ -429,6 +447,9 @@ def main():
                         ratios_filtered.append(fr)
                 if kind == "t" and pose[s, k, "icp-bundle"] and pose[s, k, "j-full"]:
                     ratios_bundle.append((s, k, pose[s, k, "j-full"]["t"] / pose[s, k, "icp-bundle"]["t"]))
+                bf, ff = pose[s, k, "icp-bundle-filtered"], pose[s, k, "j-full-filtered"]
+                if kind == "t" and bf and ff:
+                    ratios_bundle_filtered.append(ff["t"] / bf["t"])
                 pr = paper[kind][k][0] / paper[kind][k][3]
                 w(f"| {k} % | " + " | ".join(fmt(x) for x in ours) + " | " +
                   " | ".join(fmt(x) for x in paper[kind][k]) +
@@ -894,6 +915,12 @@ def main():
           f"J-full better in {len(better)} of {len(ratios_bundle)} cells.")
     else:
         w("- **J-full vs ICP-bundle**: no ICP-bundle runs in this report.")
+    if ratios_bundle_filtered:
+        r = ratios_bundle_filtered
+        w(f"- **J-full vs ICP-bundle, both on the filtered depth** in translation (not in the "
+          f"paper; on the raw depth ICP-bundle's normals are noise): J-full / ICP-bundle = "
+          f"{min(r):.2f} – {max(r):.2f}; J-full better in {sum(x < 1 for x in r)} of {len(r)} "
+          f"noisy cells.")
     full_ftf = [(s, k) for s in SCENES for k in NOISES
                 if pose[s, k, "j-full"] and pose[s, k, "j-ftf"]]
     if full_ftf:
