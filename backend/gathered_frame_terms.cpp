@@ -54,20 +54,20 @@ int GatheredFrameTerms<Lane>::gather(const VertexView& view, const RigidMotion<d
   const Eigen::Vector3f* row = view.data + static_cast<std::ptrdiff_t>(v) * view.width + u;
   if (u >= reach_ && v >= reach_ && u + reach_ < view.width && v + reach_ < view.height) {
     // The whole pattern is in the image: no bounds checks, and a branch-free compaction (each
-    // point is written, the count advances only past finite ones).
+    // point is written, the count advances only past samples).
     for (int k = 0; k < pattern_size; ++k) {
       const Eigen::Vector3f& Q = row[linear_[k]];
       qx[n] = Q.x();
       qy[n] = Q.y();
       qz[n] = Q.z();
-      n += is_finite_point(Q) ? 1 : 0;
+      n += is_sample_point(Q) ? 1 : 0;
     }
   } else {
     for (int k = 0; k < pattern_size; ++k) {
       const int su = u + pattern[k].du, sv = v + pattern[k].dv;
       if (!view.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
       const Eigen::Vector3f& Q = view(su, sv);
-      if (!is_finite_point(Q)) continue;
+      if (!is_sample_point(Q)) continue;
       qx[n] = Q.x();
       qy[n] = Q.y();
       qz[n] = Q.z();

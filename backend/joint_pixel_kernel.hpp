@@ -160,7 +160,7 @@ JPCR_HD void accumulate_frame_terms(const QuadricT<Scalar>& q, const VertexView&
     const int su = u + pattern[k].du, sv = v + pattern[k].dv;
     if (!view.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
     const Eigen::Vector3f& Qf = view(su, sv);
-    if (!is_finite_point(Qf)) continue;  // all three coordinates, as Quad IT
+    if (!is_sample_point(Qf)) continue;  // all three coordinates, as Quad IT
     const Vector3 X = T.apply(Qf.template cast<Scalar>());
     const QuadricLinearization<Scalar> l = linearize_quadric(q, X);
     const Scalar d2 = l.v.squaredNorm();  // |X − p̄|², R orthonormal
@@ -204,7 +204,7 @@ JPCR_HD Scalar frame_cost(const QuadricT<Scalar>& q, const VertexView& view,
     const int su = u + pattern[k].du, sv = v + pattern[k].dv;
     if (!view.in_bounds(su, sv)) continue;
     const Eigen::Vector3f& Qf = view(su, sv);
-    if (!is_finite_point(Qf)) continue;  // all three coordinates, as Quad IT
+    if (!is_sample_point(Qf)) continue;  // all three coordinates, as Quad IT
     const Eigen::Matrix<Scalar, 3, 1> Q = Qf.template cast<Scalar>();
     const Eigen::Matrix<Scalar, 3, 1> X = T.apply(Q);
     const Scalar d2 = (T_weight.apply(Q) - q.center).squaredNorm();

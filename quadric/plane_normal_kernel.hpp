@@ -88,13 +88,13 @@ JPCR_HD bool window_moments(const VertexView& vertices, int u, int v,
   outer.setZero();
   count = 0;
   const Eigen::Vector3f centre = vertices(u, v);
-  if (!is_finite_value(centre.z())) return false;
+  if (!is_sample_point(centre)) return false;
   const float jump = p.max_depth_jump * centre.z();
   for (int dv = -p.half_window; dv <= p.half_window; ++dv) {
     for (int du = -p.half_window; du <= p.half_window; ++du) {
       if (!vertices.in_bounds(u + du, v + dv)) continue;
       const Eigen::Vector3f& X = vertices(u + du, v + dv);
-      if (!is_finite_value(X.z()) || fabsf(X.z() - centre.z()) > jump) continue;
+      if (!is_sample_point(X) || fabsf(X.z() - centre.z()) > jump) continue;
       const Eigen::Vector3d d = (X - centre).cast<double>();
       sum += d;
       outer += d * d.transpose();

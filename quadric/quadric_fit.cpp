@@ -32,10 +32,10 @@ class VertexPlanes {
       plane.assign(size, std::numeric_limits<float>::quiet_NaN());
     for (int v = 0; v < vertices.height(); ++v) {
       for (int u = 0; u < vertices.width(); ++u) {
-        // A vertex with any coordinate not finite is no sample (fit_quadric_pixel skips it
-        // too): all three NaN.
+        // A vertex that is no sample (is_sample_point; fit_quadric_pixel skips it too): all
+        // three NaN.
         const Eigen::Vector3f& X = vertices(u, v);
-        if (!X.allFinite()) continue;
+        if (!is_sample_point(X)) continue;
         const std::size_t i = index(u, v);
         for (int axis = 0; axis < 3; ++axis)
           planes_[axis][i] = X(axis);

@@ -51,7 +51,7 @@ class CleanWindows {
       float lo = vertices_(u, v - h).z(), hi = lo;
       for (int r = v - h; r <= v + h; ++r) {
         const Eigen::Vector3f& X = vertices_(u, r);
-        finite = finite && is_finite_value(X.z());
+        finite = finite && is_sample_point(X);
         lo = std::min(lo, X.z());
         hi = std::max(hi, X.z());
         m.add(X);
@@ -116,7 +116,7 @@ NormalMap estimate_normals(const VertexMap& vertices, const NormalEstimationPara
     for (int v = 0; v < vertices.height(); ++v) {
       const bool loaded = windows.load_row(v);
       for (int u = 0; u < vertices.width(); ++u) {
-        if (!is_finite_value(vertices(u, v).z())) continue;  // no centre: no normal
+        if (!is_sample_point(vertices(u, v))) continue;  // no centre: no normal
         if (!loaded || !windows.normal(u, v, normals(u, v)))
           normals(u, v) = plane_normal(view, u, v, params);
       }

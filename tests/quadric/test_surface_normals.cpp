@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 
 #include <Eigen/Eigenvalues>
@@ -106,6 +107,47 @@ TEST(SurfaceNormals, ShortcutAgreesWithPlaneNormal) {
       EXPECT_EQ(a.validity_differs, 0) << "seed " << seed;
       EXPECT_LT(a.worst_excess, 1.0) << "seed " << seed;
     }
+  }
+}
+
+// A caller's vertex with NaN in x alone, or a "no return" 1e25 m, is no point of any window,
+// as a vertex without depth: the normals are those with that vertex all NaN, by both paths
+// (estimate_normals and plane_normal, which the GPU runs). The windows checked z alone: NaN x
+// made the 49 normals around it NaN, 1e25 the moments' sums infinite.
+TEST(SurfaceNormals, AVertexThatIsNoSampleIsNoPointOfAnyWindow) {
+  const SyntheticFrame f = test::random_frame(11, 80, 60);
+  const VertexMap clean = compute_vertex_map(f.frame.depth, f.frame.camera);
+  ASSERT_TRUE(clean(40, 30).allFinite());
+  VertexMap hole = clean;
+  hole(40, 30) = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  const NormalEstimationParams p;
+  const NormalMap expected = estimate_normals(hole, p);
+  for (const Eigen::Vector3f& bad :
+       {Eigen::Vector3f(std::numeric_limits<float>::quiet_NaN(), 0.1f, clean(40, 30).z()),
+        Eigen::Vector3f(0.1f, 0.2f, 1e25f)}) {
+    VertexMap vertices = clean;
+    vertices(40, 30) = bad;
+    const NormalMap normals = estimate_normals(vertices, p);
+    const VertexView view{vertices.data(), vertices.width(), vertices.height()},
+        hole_view{hole.data(), hole.width(), hole.height()};
+    int compared = 0;
+    for (int v = 26; v <= 34; ++v)
+      for (int u = 36; u <= 44; ++u) {
+        const Eigen::Vector3f n = normals(u, v), e = expected(u, v);
+        const Eigen::Vector3f r = plane_normal(view, u, v, p),
+                              rh = plane_normal(hole_view, u, v, p);
+        ASSERT_EQ(is_valid(n), is_valid(e)) << u << "," << v;
+        ASSERT_EQ(is_valid(r), is_valid(rh)) << u << "," << v;
+        if (is_valid(e)) {
+          EXPECT_EQ(n, e) << u << "," << v;
+        }
+        if (is_valid(rh)) {
+          EXPECT_EQ(r, rh) << u << "," << v;
+        }
+        compared += is_valid(e) ? 1 : 0;
+      }
+    EXPECT_EQ(compared, 80);                  // every pixel of the 9x9 block but the centre
+    EXPECT_FALSE(is_valid(normals(40, 30)));  // no centre: no normal
   }
 }
 
