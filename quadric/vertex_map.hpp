@@ -23,8 +23,9 @@ inline bool is_valid(const Eigen::Vector3f& x) {
 
 /// The farthest depth taken as a measurement (m). Beyond it a depth value is a sensor's
 /// "no return" marker (FLT_MAX, 1e30), never a range: the float sums of the CPU fits would
-/// overflow on such a vertex (a sample dropped by a zero weight then adds 0 · inf = NaN), while
-/// the reference kernels skip it. Vertex maps handed to the fits directly must keep within it.
+/// overflow on such a vertex (a sample dropped by a zero weight then adds 0 · inf = NaN). In a
+/// vertex map handed to the fits directly, is_sample_point (quadric_fit_kernel.hpp) drops
+/// vertices beyond 1e6 m on every path.
 inline constexpr float kMaxMeasurableDepth = 1e4f;
 
 /// A depth value is a measurement when it is finite, positive and at most kMaxMeasurableDepth.
