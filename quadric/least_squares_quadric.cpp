@@ -7,6 +7,8 @@
 #include <Eigen/Cholesky>
 #include <Eigen/LU>
 
+#include "jpcr/quadric/quadric_fit_kernel.hpp"
+
 namespace jpcr {
 
 namespace {
@@ -31,7 +33,7 @@ QuadricStatus fit_height_field(const VertexMap& vertices, const NeighbourhoodPat
     for (const PixelOffset& o : pattern.offsets) {
       if (!vertices.in_bounds(u + o.du, v + o.dv)) continue;
       const Eigen::Vector3f& X = vertices(u + o.du, v + o.dv);
-      if (is_valid(X)) f(Eigen::Vector3d(R * (X.cast<double>() - centre)));
+      if (is_sample_point(X)) f(Eigen::Vector3d(R * (X.cast<double>() - centre)));
     }
   };
   int n = 0;
@@ -98,7 +100,7 @@ QuadricMap LeastSquaresQuadric::estimate(const VertexMap& vertices,
 #pragma omp parallel for schedule(dynamic, 4)
   for (int v = 0; v < vertices.height(); ++v) {
     for (int u = 0; u < vertices.width(); ++u) {
-      if (!is_valid(vertices(u, v))) {
+      if (!is_sample_point(vertices(u, v))) {
         map.set_invalid(u, v, QuadricStatus::kNoCentre);
         continue;
       }

@@ -62,14 +62,16 @@ JPCR_HD bool is_finite_value(float x) {
 }
 
 /// The largest coordinate (m) of a vertex taken as a sample: beyond it the CPU fits' float sums
-/// (fourth powers over a pattern) would overflow, while the double reference kernels weigh the
-/// vertex to nothing, so the two would disagree. compute_vertex_map keeps depth within
-/// kMaxMeasurableDepth (1e4 m), far inside; a caller's own map may hold a "no return" 1e25.
-constexpr float kMaxSampleCoordinate = 1e6f;
+/// (fourth powers over a pattern, 129 · (1e7)⁴ ≈ 1e30 here) near overflow, while the double
+/// reference kernels weigh the vertex to nothing, so the two would disagree. compute_vertex_map
+/// keeps depth within kMaxMeasurableDepth (1e4 m): |x| stays below 9.2e5 m for any camera that
+/// CameraIntrinsics::validate accepts; a caller's own map may hold a "no return" 1e25.
+constexpr float kMaxSampleCoordinate = 1e7f;
 
 /// True for a vertex that is a sample: its three coordinates finite and within
 /// ±kMaxSampleCoordinate (vertex maps mark a pixel without depth with NaN, and a caller's map
-/// may hold NaN in x or y alone). The one test of every fit, normal and joint term, CPU and GPU.
+/// may hold NaN in x or y alone). The one test of every fit (Quad IT, Quad LS), normal and joint
+/// term, CPU and GPU.
 JPCR_HD bool is_sample_point(const Eigen::Vector3f& X) {
   // false for NaN too
   return fabsf(X.x()) <= kMaxSampleCoordinate && fabsf(X.y()) <= kMaxSampleCoordinate &&
@@ -127,7 +129,7 @@ JPCR_HD void accumulate_quadric_samples(const QuadricT<Scalar>& q, const VertexV
     const int su = u + pattern[k].du, sv = v + pattern[k].dv;
     if (!vertices.in_bounds(su, sv)) continue;  // 2-D bounds check (method.md §2)
     const Eigen::Vector3f& Xf = vertices(su, sv);
-    // A vertex with any coordinate not finite is no sample (as VertexPlanes of the dense fit).
+    // A vertex that is no sample is skipped (as VertexPlanes of the dense fit).
     if (!is_sample_point(Xf)) continue;
     const Vector3 X = Xf.template cast<Scalar>();
     const QuadricLinearization<Scalar> l = linearize_quadric(q, X);
@@ -177,8 +179,9 @@ JPCR_HD bool solve_damped_step(const NormalEquations6<Scalar>& ne, double dampin
   return true;
 }
 
-/// Whether `centre` can be a quadric's p̄: three finite coordinates and a range |p̄| > 0 (the fit's
-/// range units); `range` gets |p̄| in double, the same in the per-pixel and the lane-parallel fit.
+/// Whether `centre` can be a quadric's p̄: a sample (is_sample_point) with a range |p̄| > 0 (the
+/// fit's range units); `range` gets |p̄| in double, the same in the per-pixel and the lane-parallel
+/// fit.
 JPCR_HD bool centre_with_range(const Eigen::Vector3f& centre, double& range) {
   if (!is_sample_point(centre)) return false;
   const double x = centre.x(), y = centre.y(), z = centre.z();

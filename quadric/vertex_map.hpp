@@ -25,7 +25,7 @@ inline bool is_valid(const Eigen::Vector3f& x) {
 /// "no return" marker (FLT_MAX, 1e30), never a range: the float sums of the CPU fits would
 /// overflow on such a vertex (a sample dropped by a zero weight then adds 0 · inf = NaN). In a
 /// vertex map handed to the fits directly, is_sample_point (quadric_fit_kernel.hpp) drops
-/// vertices beyond 1e6 m on every path.
+/// vertices beyond 1e7 m in Quad IT, Quad LS, the normals and the joint terms.
 inline constexpr float kMaxMeasurableDepth = 1e4f;
 
 /// A depth value is a measurement when it is finite, positive and at most kMaxMeasurableDepth.

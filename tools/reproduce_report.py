@@ -71,8 +71,9 @@ def load_json(path):
 
 
 def filtered_revisions(a, methods):
-    """', made at revision X' for filtered-depth runs made at another revision than the report's
-    run (a column added to an earlier run), else ''."""
+    """'; <column> at revision `X`' for filtered-depth runs made at another revision than the
+    report's run (a column added to an earlier run), else ''. The runs' revision files hold the
+    commit alone; --revision may add '+<diff hash>' for a tree with changes."""
     revs = set()
     for s in SCENES:
         for k in NOISES:
@@ -80,7 +81,8 @@ def filtered_revisions(a, methods):
                 f = os.path.join(a.runs, s, f"range{k}", m, "revision")
                 if os.path.exists(f):
                     revs.add((m, open(f).read().strip()))
-    other = sorted({(m, r) for m, r in revs if r != a.revision})
+    commit = a.revision.split("+")[0]
+    other = sorted({(m, r) for m, r in revs if r != commit})
     if not other:
         return ""
     return "; " + ", ".join(f"{LABEL[m]} at revision `{r}`" for m, r in other)
@@ -445,10 +447,12 @@ def main():
                     fratio = f" | {fmt(fr, '.1f')}x" if fr else " | –"
                     if fr and kind == "t":
                         ratios_filtered.append(fr)
-                if kind == "t" and pose[s, k, "icp-bundle"] and pose[s, k, "j-full"]:
-                    ratios_bundle.append((s, k, pose[s, k, "j-full"]["t"] / pose[s, k, "icp-bundle"]["t"]))
+                # A run without consecutive ground truth has no error (null): no ratio.
+                b, f = pose[s, k, "icp-bundle"], pose[s, k, "j-full"]
+                if kind == "t" and b and f and b["t"] and f["t"] is not None:
+                    ratios_bundle.append((s, k, f["t"] / b["t"]))
                 bf, ff = pose[s, k, "icp-bundle-filtered"], pose[s, k, "j-full-filtered"]
-                if kind == "t" and bf and ff:
+                if kind == "t" and bf and ff and bf["t"] and ff["t"] is not None:
                     ratios_bundle_filtered.append(ff["t"] / bf["t"])
                 pr = paper[kind][k][0] / paper[kind][k][3]
                 w(f"| {k} % | " + " | ".join(fmt(x) for x in ours) + " | " +
@@ -777,7 +781,7 @@ def main():
             w("")
             n = len(study_cells)
             w(f"J-ftf's RMS error is below ICP-ftf's in {better['j-ftf'][0]} of {n} cells in "
-              f"translation ({ties} within 1 %, shown as 1.00x) and {better['j-ftf'][1]} of {n} in rotation; on the filtered depth "
+              f"translation ({ties} within 1 %) and {better['j-ftf'][1]} of {n} in rotation; on the filtered depth "
               f"(`pipeline.filtered_depth`, the depth ICP-ftf tracks) in "
               f"{better['j-ftf-filtered'][0]} of {n} and {better['j-ftf-filtered'][1]} of {n}.\n")
 

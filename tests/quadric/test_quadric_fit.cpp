@@ -257,29 +257,35 @@ TEST(QuadricFit, AFarNoReturnMarkerIsNoMeasurement) {
 }
 
 // The same marker in a vertex map the caller builds (compute_vertex_map never keeps it), or NaN
-// in x alone: no sample, as the NaN vertex (is_finite_point). The CPU fit's float sums
-// overflowed on 1e25 and 24 pixels came out singular, where the double kernel the GPU runs
-// skipped it.
+// in x alone: no sample, as the NaN vertex (is_sample_point), for Quad IT and Quad LS. The CPU
+// fit's float sums overflowed on 1e25 and 24 pixels came out singular, where the double kernel
+// the GPU runs skipped it; Quad LS changed 25 pixels' status (a NaN x made its scale NaN).
 TEST(QuadricFit, AVertexThatIsNoSampleInACallersMapIsSkipped) {
   const CameraIntrinsics camera = synthetic_camera(64, 48);
   const VertexMap clean = compute_vertex_map(DepthImage(camera.width, camera.height, 1.0f), camera);
   VertexMap hole = clean;
   hole(40, 30) = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
-  const QuadricMap expected = QuadricFit().estimate(hole);
-  for (const Eigen::Vector3f& bad : {Eigen::Vector3f(0.1f, 0.2f, 1e25f),
-                                     Eigen::Vector3f(std::numeric_limits<float>::quiet_NaN(),
-                                                     clean(40, 30).y(), clean(40, 30).z())}) {
-    VertexMap vertices = clean;
-    vertices(40, 30) = bad;
-    const QuadricMap map = QuadricFit().estimate(vertices);
-    EXPECT_EQ(summarize(map).valid, summarize(expected).valid);
-    for (int v = 0; v < camera.height; ++v)
-      for (int u = 0; u < camera.width; ++u) {
-        ASSERT_EQ(map.status(u, v), expected.status(u, v)) << u << "," << v;
-        if (map.status(u, v) == QuadricStatus::kValid) {
-          ASSERT_EQ(map.curvature(u, v), expected.curvature(u, v)) << u << "," << v;
+  const QuadricFit it;
+  const LeastSquaresQuadric ls;
+  for (const CurvatureEstimator* estimator :
+       {static_cast<const CurvatureEstimator*>(&it), static_cast<const CurvatureEstimator*>(&ls)}) {
+    const QuadricMap expected = estimator->estimate(hole);
+    for (const Eigen::Vector3f& bad : {Eigen::Vector3f(0.1f, 0.2f, 1e25f),
+                                       Eigen::Vector3f(std::numeric_limits<float>::quiet_NaN(),
+                                                       clean(40, 30).y(), clean(40, 30).z())}) {
+      VertexMap vertices = clean;
+      vertices(40, 30) = bad;
+      const QuadricMap map = estimator->estimate(vertices);
+      EXPECT_EQ(summarize(map).valid, summarize(expected).valid) << estimator->name();
+      for (int v = 0; v < camera.height; ++v)
+        for (int u = 0; u < camera.width; ++u) {
+          ASSERT_EQ(map.status(u, v), expected.status(u, v))
+              << estimator->name() << " " << u << "," << v;
+          if (map.status(u, v) == QuadricStatus::kValid) {
+            ASSERT_EQ(map.curvature(u, v), expected.curvature(u, v)) << u << "," << v;
+          }
         }
-      }
+    }
   }
 }
 
