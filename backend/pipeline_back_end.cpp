@@ -60,15 +60,6 @@ RefinementResult refine_or_report(const Refiner& refiner, const std::vector<Fram
   return r;
 }
 
-// Keyframe poses are chains of compositions, and each window composes its first pose with the
-// poses relative to it (window first⁻¹ by transpose, then first again): a rotation that is off
-// orthonormal by e comes back off by about 2e, so without this the error doubled every window.
-Eigen::Isometry3d rigid(const Eigen::Isometry3d& T) {
-  Eigen::Isometry3d out = T;
-  out.linear() = orthonormalize(T.linear());
-  return out;
-}
-
 }  // namespace
 
 /// The keyframes the back end still works on: the current J-full window (or the last pair), with
@@ -259,8 +250,8 @@ void PipelineBackEnd::on_keyframe(const Frame& frame, const PipelineFrame& track
     // Until the back end says otherwise, the keyframe moves by the front end's motion from the
     // previous keyframe, applied to that keyframe's refined pose.
     const PipelineKeyframe& previous = keyframes_.back();
-    k.refined.pose =
-        rigid(previous.refined.pose * (previous.front_end.pose.inverse() * tracked.front_end.pose));
+    k.refined.pose = orthonormalized(previous.refined.pose *
+                                     (previous.front_end.pose.inverse() * tracked.front_end.pose));
   }
   // ICP-ftf: nothing refines a keyframe; every one but the gauge is the front end's motion.
   k.used_front_end = !refines && !keyframes_.empty();
@@ -295,7 +286,7 @@ void PipelineBackEnd::refine_pair() {
   b.pair = r.report;
   b.used_front_end = !usable(r);
   if (usable(r)) {
-    b.refined.pose = rigid(a.refined.pose * r.poses[1]);
+    b.refined.pose = orthonormalized(a.refined.pose * r.poses[1]);
     window_->quadrics[n - 2] = r.quadrics;
     window_->sources[n - 2] = pair_refiner_->name();
   }
@@ -318,7 +309,10 @@ void PipelineBackEnd::refine_window() {
   for (std::size_t j = 1; j < n; ++j) {
     PipelineKeyframe& k = keyframe_at(window_->keyframes[j]);
     if (usable(r)) {
-      k.refined.pose = rigid(anchor * r.poses[j]);
+      // Keyframe poses are chains of compositions, and each window composes its first pose with
+      // the poses relative to it: without orthonormalizing, the rotations' error doubled every
+      // window (se3.hpp).
+      k.refined.pose = orthonormalized(anchor * r.poses[j]);
       k.used_front_end = false;
     } else if (!pair_refiner_) {
       k.used_front_end = true;  // with J-ftf, its pose (or its failure) stands

@@ -117,4 +117,10 @@ Eigen::Matrix3d orthonormalize(const Eigen::Matrix3d& R) {
   return svd.matrixU() * D * svd.matrixV().transpose();
 }
 
+Eigen::Isometry3d orthonormalized(const Eigen::Isometry3d& T) {
+  Eigen::Isometry3d out = T;
+  out.linear() = orthonormalize(T.linear());
+  return out;
+}
+
 }  // namespace jpcr

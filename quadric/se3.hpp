@@ -39,6 +39,11 @@ double rotation_angle(const Eigen::Matrix3d& R);
 /// Projects a nearly orthonormal matrix back onto SO(3) (drift after many updates).
 Eigen::Matrix3d orthonormalize(const Eigen::Matrix3d& R);
 
+/// T with its rotation orthonormalized. For chains of composed poses: Isometry3d's inverse
+/// transposes the rotation, so a rotation off orthonormal by e gives a relative motion off by
+/// about 2e, and composing such motions again and again multiplies the error.
+Eigen::Isometry3d orthonormalized(const Eigen::Isometry3d& T);
+
 /// Whether T is a rigid motion: finite, |RᵀR − I| ≤ tolerance in every entry, det R > 0, and
 /// the bottom row (0, 0, 0, 1). The refiners refuse other initial poses (a scale or shear in T
 /// would otherwise pass through the residuals as a false motion).
