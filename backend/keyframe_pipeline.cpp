@@ -14,14 +14,17 @@ PipelineFrame PipelineFrontEnd::track(const Frame& frame, bool* keyframe) {
   PipelineFrame f;
   f.index = track.index;
   f.front_end = track.T_wc;
-  const bool first = track.index == 0;
-  f.icp_verdict = first ? IcpVerdict::ok : track.icp.verdict;
+  // The gauge was aligned to nothing and is exact by definition; a frame before it (no points
+  // to align against yet) keeps the default alignment's verdict and unknown covariance.
+  f.icp_verdict = track.is_gauge ? IcpVerdict::ok : track.icp.verdict;
   f.kept_last_motion = track.kept_last_motion;
-  if (!first) f.icp_covariance = track.icp.covariance;
+  if (!track.is_gauge) f.icp_covariance = track.icp.covariance;
   f.pose_covariance = track.pose_covariance;
   f.track_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-  // The single methods refine every consecutive frame; the pipeline follows the front end.
-  *keyframe = first || track.is_keyframe || method_ != PipelineMethod::kPipeline;
+  // The single methods refine every consecutive frame from the gauge on; the pipeline follows
+  // the front end. A frame before the gauge is no keyframe: it has no depth to refine.
+  *keyframe =
+      track.is_keyframe || (method_ != PipelineMethod::kPipeline && tracker_.has_keyframe());
   return f;
 }
 

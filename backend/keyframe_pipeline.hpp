@@ -20,7 +20,9 @@
 // split deployment (jpcr_node --role frontend / backend) runs the two halves in two processes.
 // Poses are camera-to-world (T_wc, method.md §1); the first frame's pose is the gauge:
 // PipelineParams::initial_pose, by default the identity, so that the trajectory is in the first
-// camera's axes (x right, y down, z forward).
+// camera's axes (x right, y down, z forward). A sensor that starts blank moves the gauge to the
+// first frame with the points to be aligned against (KeyframeTracker); the frames before it stay
+// at that pose, untrusted (too_few_points).
 //
 // Threads: an object is used from one thread at a time; distinct objects are independent. add()
 // runs the refinements in the calling thread (a J-full window takes seconds on the CPU at

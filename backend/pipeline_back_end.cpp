@@ -144,7 +144,6 @@ const PipelineFrame& PipelineBackEnd::add(const PipelineFrame& tracked, const Fr
   if (tracked.index != static_cast<int>(frame_count()))
     throw InputError("frame " + std::to_string(tracked.index) + " arrived as frame " +
                      std::to_string(frame_count()) + " (frames lost or reordered)");
-  if (!keyframe && keyframe_count() == 0) throw InputError("the first frame must be a keyframe");
   // Each keyframe's pose builds on the previous one's: one pose that is not rigid (NaN) would
   // spoil every later keyframe.
   if (!is_rigid(tracked.front_end.pose))
@@ -196,6 +195,7 @@ bool PipelineBackEnd::interpolates() const {
 
 // A frame's pose depends on its keyframe and, when corrections are interpolated, on the next one.
 bool PipelineBackEnd::is_final(const PipelineFrame& f) const {
+  if (f.keyframe < 0) return true;  // before the first keyframe: nothing refines it
   const std::size_t k = static_cast<std::size_t>(f.keyframe);
   if (k >= final_keyframes_) return false;
   return finished_ || !interpolates() || k + 1 < final_keyframes_;
@@ -220,8 +220,9 @@ void PipelineBackEnd::emit_final_frames() {
 void PipelineBackEnd::forget_emitted() {
   const std::size_t frames_gone = std::min(emitted_, frame_count() - 1) - first_frame_;
   if (frames_gone == 0 || 2 * frames_gone < frames_.size()) return;
-  std::size_t keep = keyframe_count() - 1;
-  keep = std::min(keep, static_cast<std::size_t>(frames_[frames_gone].keyframe));
+  std::size_t keep = keyframe_count() == 0 ? 0 : keyframe_count() - 1;
+  if (frames_[frames_gone].keyframe >= 0)
+    keep = std::min(keep, static_cast<std::size_t>(frames_[frames_gone].keyframe));
   if (!window_->keyframes.empty())
     keep = std::min(keep, static_cast<std::size_t>(window_->keyframes.front()));
   const std::size_t keyframes_gone = keep - first_keyframe_;
@@ -378,6 +379,7 @@ const PipelineKeyframe& PipelineBackEnd::keyframe(std::size_t index) const {
 
 StampedPose PipelineBackEnd::refined_pose(std::size_t index) const {
   const PipelineFrame& f = frame(index);
+  if (f.keyframe < 0) return f.front_end;  // before the first keyframe
   const std::size_t ki = static_cast<std::size_t>(f.keyframe);
   const PipelineKeyframe& k = keyframe(ki);
   StampedPose p = f.front_end;
@@ -414,6 +416,7 @@ FrameVerdicts PipelineBackEnd::verdicts(std::size_t index) const {
   const PipelineFrame& f = frame(index);
   FrameVerdicts v;
   v.front_end = f.icp_verdict;
+  if (f.keyframe < 0) return v;  // before the first keyframe
   const PipelineKeyframe& k = keyframe(static_cast<std::size_t>(f.keyframe));
   if (k.pair) v.pair = k.pair->verdict;
   // The gauge keyframe is never refined; any other was last refined by the window it ends, or

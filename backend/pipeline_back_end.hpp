@@ -25,7 +25,7 @@
 // keyframes() and trajectory() give what is still held); with the default, it keeps every frame
 // (about 0.5 kB each) and keyframe for trajectory() at the end.
 //
-// Poses are camera-to-world (T_wc, method.md §1); the first frame's pose is the gauge.
+// Poses are camera-to-world (T_wc, method.md §1); the first keyframe's pose is the gauge.
 #pragma once
 
 #include <exception>
@@ -66,7 +66,7 @@ struct PipelineParams {
   /// 640x480 room_spheres walk, 5.1e-4 m RMS relative error against 1.3e-3 m on the raw depth
   /// (README, "Range noise"). Off by default: the curvature maps then describe the smoothed depth.
   bool filtered_depth = false;
-  /// T_wc of the first frame, the gauge (KeyframeTracker's initial_pose): the trajectory is
+  /// T_wc of the first keyframe, the gauge (KeyframeTracker's initial_pose): the trajectory is
   /// expressed in that world frame (a robot's map or odom frame). Identity: the first camera's.
   Eigen::Isometry3d initial_pose = Eigen::Isometry3d::Identity();
   FrontendParams frontend;
@@ -80,14 +80,16 @@ struct PipelineParams {
 struct PipelineFrame {
   int index = 0;
   StampedPose front_end;  // the front end's T_wc (trajectory() gives the refined one)
-  int keyframe = 0;       // index into keyframes(): the keyframe the frame hangs on
-  IcpVerdict icp_verdict = IcpVerdict::ok;  // ok for the first frame
+  /// Index into keyframes(): the keyframe the frame hangs on; −1 for a frame before the first
+  /// keyframe (a sensor starting blank), which keeps its front-end pose and verdict.
+  int keyframe = 0;
+  IcpVerdict icp_verdict = IcpVerdict::ok;  // ok for the gauge (the first keyframe)
   bool kept_last_motion = false;            // the front end extrapolated (alignment failed)
   /// The front end's ICP covariance of the frame's alignment (IcpResult::covariance, over
-  /// x, y, z, rx, ry, rz); zero for the first frame, which is the gauge.
+  /// x, y, z, rx, ry, rz); zero for the gauge.
   Matrix6d icp_covariance = Matrix6d::Zero();
   /// The front end's covariance of its T_wc along the chain of alignments
-  /// (TrackResult::pose_covariance: a left update in world axes); zero for the first frame.
+  /// (TrackResult::pose_covariance: a left update in world axes); zero for the gauge.
   Matrix6d pose_covariance = Matrix6d::Zero();
   double track_ms = 0.0;
 };
@@ -115,7 +117,7 @@ struct PipelineKeyframe {
 /// What the front end and the back end said about one frame (jpcr_run's verdicts.txt): whether
 /// its pose can be trusted (architecture.md: every result says so).
 struct FrameVerdicts {
-  IcpVerdict front_end = IcpVerdict::ok;  // the frame's alignment (ok for the first frame)
+  IcpVerdict front_end = IcpVerdict::ok;  // the frame's alignment (ok for the gauge)
   /// J-ftf of the frame's keyframe against the previous keyframe; absent for the first keyframe
   /// and for methods without J-ftf.
   std::optional<RefinementVerdict> pair;
@@ -137,8 +139,8 @@ using CurvatureSink =
     std::function<void(int keyframe, const Frame& frame, const QuadricMap& quadrics)>;
 
 /// Receives each frame once its refined pose is final (see above), in frame order, with that pose
-/// and its verdicts; finish() hands over the rest. The frame's keyframe (keyframe(frame.keyframe))
-/// is still held during the call.
+/// and its verdicts; finish() hands over the rest. The frame's keyframe (keyframe(frame.keyframe),
+/// where frame.keyframe >= 0) is still held during the call.
 using FrameSink = std::function<void(const PipelineFrame& frame, const StampedPose& refined,
                                      const FrameVerdicts& verdicts)>;
 
@@ -151,8 +153,9 @@ class PipelineBackEnd {
   PipelineBackEnd& operator=(const PipelineBackEnd&) = delete;
 
   /// Appends the next tracked frame (`tracked.index` = frames().size(); its `keyframe` field is
-  /// set here). `keyframe` is the frame's depth when the front end made it a keyframe (the first
-  /// frame always is), else null; a keyframe is refined when it completes a pair or a window.
+  /// set here). `keyframe` is the frame's depth when the front end made it a keyframe, else null
+  /// (frames before the first keyframe hang on none and keep their front-end poses); a keyframe
+  /// is refined when it completes a pair or a window.
   /// Throws InputError, with nothing changed, for a frame out of order, a front-end pose that is
   /// no rigid motion (finite, R orthonormal to 1e-6) and a keyframe whose camera differs from the
   /// first keyframe's; std::logic_error after finish(). A refiner that throws does not reach the

@@ -80,11 +80,21 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
   r.preprocess_ms = ms_since(start);
 
   const TrackerParams& tp = params_.tracker;
-  bool can_reference = true;  // the frame becomes the next one's reference (frame to frame)
-  if (frames_ == 0) {
-    camera_ = frame.camera;
+  if (frames_ == 0) camera_ = frame.camera;
+  // Whether the frame becomes the next one's reference (frame to frame).
+  bool can_reference = can_be_reference(*pyramid, params_.icp, pool_.get());
+  if (!has_keyframe()) {
+    // The first frame with the points to be aligned against is keyframe 0, the gauge, at
+    // initial_pose. A frame before it (a sensor starting blank) has nothing to be aligned to:
+    // it stays at the gauge's pose, an unknown motion (1 m and 1 rad per axis), with the
+    // default alignment's verdict, too_few_points.
     r.T_wc.pose = initial_pose_;
-    r.is_keyframe = true;
+    r.is_keyframe = r.is_gauge = can_reference;
+    if (!can_reference) {
+      r.kept_last_motion = true;
+      const Matrix6d Ad = se3_adjoint(initial_pose_);
+      r.pose_covariance = Ad * Ad.transpose();
+    }
   } else {
     const bool to_keyframe = tp.mode == TrackingMode::frame_to_keyframe;
     const FramePyramid& reference = to_keyframe ? *keyframe_.pyramid : *previous_;
@@ -133,7 +143,6 @@ TrackResult KeyframeTracker::track(const Frame& frame) {
         r.kept_last_motion && (to_keyframe || r.icp.verdict != IcpVerdict::degenerate);
     const Eigen::Isometry3d T_kf_c = keyframe_.T_wc.pose.inverse() * r.T_wc.pose;
     r.overlap = overlap_with(*pyramid, *keyframe_.pyramid, T_kf_c, params_.icp, pool_.get());
-    can_reference = can_be_reference(*pyramid, params_.icp, pool_.get());
     r.is_keyframe = (T_kf_c.translation().norm() > tp.keyframe_translation ||
                      rotation_angle(T_kf_c.linear()) > tp.keyframe_rotation * kDegToRad ||
                      r.overlap < tp.keyframe_overlap || failed) &&

@@ -32,9 +32,13 @@ struct Keyframe {
 struct TrackResult {
   int index = 0;       // position of the frame in the tracked sequence (0-based)
   int reference = -1;  // index of the frame it was aligned to (frame to frame: the last one with
-                       // points, before a blank one); −1 for the first frame
+                       // points, before a blank one); −1 for the gauge and any frame before it
   StampedPose T_wc;    // camera-to-world estimate
-  IcpResult icp;       // the alignment (default-constructed for the first frame)
+  IcpResult icp;       // the alignment (default-constructed, too_few_points, without reference)
+  /// The first frame with the points to be aligned against is keyframe 0, the gauge
+  /// (initial_pose). Frames before it (a sensor starting blank) have no reference: they keep
+  /// the gauge's pose as an unknown motion (kept_last_motion, 1 m and 1 rad per axis).
+  bool is_gauge = false;
   /// Covariance of T_wc as the chain of alignments from the first frame (the gauge: zero)
   /// gives it: ξ of a left update exp(ξ^) T_wc in world axes, (v, ω) as IcpResult::covariance.
   /// Σ = Σ_ref + Ad(T_w,ref) Σ_icp Ad(T_w,ref)ᵀ (first-order, independent alignments); a frame
@@ -51,7 +55,8 @@ struct TrackResult {
 
 class KeyframeTracker {
  public:
-  /// `initial_pose` is the camera-to-world pose of the first frame (the gauge, method.md §1).
+  /// `initial_pose` is the camera-to-world pose of the first frame with points, keyframe 0 (the
+  /// gauge, method.md §1); usually frame 0.
   explicit KeyframeTracker(const FrontendParams& params = {},
                            const Eigen::Isometry3d& initial_pose = Eigen::Isometry3d::Identity());
 

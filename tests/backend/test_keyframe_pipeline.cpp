@@ -196,8 +196,8 @@ TEST(KeyframePipeline, RefusesBadInput) {
   EXPECT_THROW(pipeline.add(small), InputError);
 }
 
-// The split deployment's back end gets the frames from another process: a lost or reordered one,
-// or a first frame that is not a keyframe, is refused rather than hung on the wrong keyframe.
+// The split deployment's back end gets the frames from another process: a lost or reordered one
+// is refused rather than hung on the wrong keyframe.
 TEST(PipelineBackEnd, RefusesFramesOutOfOrder) {
   PipelineParams p;
   p.method = PipelineMethod::kIcpFtf;
@@ -205,7 +205,6 @@ TEST(PipelineBackEnd, RefusesFramesOutOfOrder) {
   const SyntheticSequence seq = walk(1);
   const Frame frame = seq.load(0);
   PipelineFrame f;
-  EXPECT_THROW(back_end.add(f, nullptr), InputError);  // frame 0 must be a keyframe
   f.index = 1;
   EXPECT_THROW(back_end.add(f, &frame), InputError);  // frame 0 is missing
   f.index = 0;
@@ -213,8 +212,114 @@ TEST(PipelineBackEnd, RefusesFramesOutOfOrder) {
   f.index = 1;
   EXPECT_EQ(back_end.add(f, nullptr).keyframe, 0);     // hangs on keyframe 0
   EXPECT_THROW(back_end.add(f, nullptr), InputError);  // frame 1 again
+  f.index = 3;
+  EXPECT_THROW(back_end.add(f, nullptr), InputError);  // frame 2 is missing
   EXPECT_EQ(back_end.frames().size(), 2u);
   EXPECT_EQ(back_end.keyframes().size(), 1u);
+}
+
+// Frames before the first keyframe (a sensor that starts blank) hang on no keyframe: each keeps
+// its front-end pose and verdict, goes to the sink at once, and is forgotten like any other,
+// also when no keyframe ever comes.
+TEST(PipelineBackEnd, FramesBeforeTheFirstKeyframeKeepTheirFrontEndPoses) {
+  const SyntheticSequence seq = walk(3);
+  for (const bool keep_history : {true, false}) {
+    PipelineParams p;
+    p.method = PipelineMethod::kJointFtf;
+    p.keep_history = keep_history;
+    PipelineBackEnd back_end(p);
+    std::vector<int> sunk;
+    back_end.set_frame_sink(
+        [&](const PipelineFrame& f, const StampedPose& pose, const FrameVerdicts& v) {
+          sunk.push_back(f.index);
+          if (f.keyframe >= 0) return;
+          EXPECT_TRUE(pose.pose.isApprox(f.front_end.pose, 0.0)) << "frame " << f.index;
+          EXPECT_EQ(v.front_end, IcpVerdict::too_few_points);
+          EXPECT_FALSE(v.pair.has_value());
+          EXPECT_FALSE(v.trusted());
+        });
+    for (int i = 0; i < 2; ++i) {
+      PipelineFrame f;
+      f.index = i;
+      f.icp_verdict = IcpVerdict::too_few_points;
+      f.front_end.pose.translation() = Eigen::Vector3d(0.1 * i, 0.0, 0.0);
+      EXPECT_EQ(back_end.add(f, nullptr).keyframe, -1);
+      EXPECT_EQ(sunk.size(), static_cast<std::size_t>(i + 1));  // final at once
+    }
+    EXPECT_EQ(back_end.keyframe_count(), 0u);
+    const Frame frame = seq.load(0);
+    PipelineFrame f;
+    f.index = 2;
+    EXPECT_EQ(back_end.add(f, &frame).keyframe, 0);
+    f.index = 3;
+    EXPECT_EQ(back_end.add(f, nullptr).keyframe, 0);
+    back_end.finish();
+    EXPECT_EQ(sunk, (std::vector<int>{0, 1, 2, 3}));
+    if (keep_history) {
+      EXPECT_DOUBLE_EQ(back_end.trajectory()[1].pose.translation().x(), 0.1);
+      EXPECT_EQ(back_end.verdicts(2).front_end, IcpVerdict::ok);
+    }
+  }
+  PipelineParams p;  // no keyframe at all: the front end's poses, as they came
+  p.keep_history = false;
+  PipelineBackEnd back_end(p);
+  std::size_t sunk = 0;
+  back_end.set_frame_sink(
+      [&](const PipelineFrame&, const StampedPose&, const FrameVerdicts&) { ++sunk; });
+  for (int i = 0; i < 50; ++i) {
+    PipelineFrame f;
+    f.index = i;
+    back_end.add(f, nullptr);
+  }
+  back_end.finish();
+  EXPECT_EQ(sunk, 50u);
+  EXPECT_EQ(back_end.keyframe_count(), 0u);
+  EXPECT_LT(back_end.frames().size(), 50u);  // forgotten as they went to the sink
+}
+
+// A sensor that starts blank: the first frame with points is the gauge, and the run from there
+// is the run that starts there (the blank frames change no pose after them); the
+// blank frames stay at the gauge's pose, untrusted. Keyframe 0 used to be the blank frame 0,
+// and 7 of the 8 frames' J-ftf pairs and J-full windows failed against it.
+TEST(KeyframePipeline, ABlankStartMovesTheGaugeToTheFirstFrameWithPoints) {
+  const SyntheticSequence seq = walk(8);
+  for (const PipelineMethod method : {PipelineMethod::kPipeline, PipelineMethod::kJointFtf}) {
+    PipelineParams p;
+    p.method = method;
+    p.window = 3;
+    p.frontend.threads = 2;
+    KeyframePipeline blank_start(p), late_start(p);
+    for (std::size_t i = 0; i < seq.size(); ++i) {
+      Frame f = seq.load(i);
+      if (i < 2) {
+        f.depth = DepthImage(f.depth.width(), f.depth.height(), 0.0f);
+      } else {
+        late_start.add(f);
+      }
+      blank_start.add(f);
+    }
+    blank_start.finish();
+    late_start.finish();
+    for (std::size_t i = 0; i < 2; ++i) {
+      EXPECT_EQ(blank_start.frame(i).keyframe, -1);
+      EXPECT_TRUE(blank_start.refined_pose(i).pose.isApprox(Eigen::Isometry3d::Identity(), 0.0));
+      EXPECT_FALSE(blank_start.verdicts(i).trusted());
+    }
+    ASSERT_EQ(blank_start.keyframe_count(), late_start.keyframe_count());
+    EXPECT_EQ(blank_start.keyframe(0).frame, 2);
+    for (std::size_t i = 2; i < seq.size(); ++i) {
+      const std::string at = std::string(to_string(method)) + ", frame " + std::to_string(i);
+      // The front end's poses to the bit; the refiners' threaded sums add in any order.
+      EXPECT_TRUE(
+          blank_start.frame(i).front_end.pose.isApprox(late_start.frame(i - 2).front_end.pose, 0.0))
+          << at;
+      EXPECT_TRUE(
+          blank_start.refined_pose(i).pose.isApprox(late_start.refined_pose(i - 2).pose, 1e-12))
+          << at;
+      EXPECT_EQ(blank_start.verdicts(i).trusted(), late_start.verdicts(i - 2).trusted()) << at;
+      EXPECT_TRUE(blank_start.verdicts(i).trusted()) << at;
+    }
+  }
 }
 
 // An application's refiner factory (e.g. J-ftf on a GPU) is what the pipeline refines with: every

@@ -270,6 +270,47 @@ TEST(KeyframeTracker, ABlackoutBeforeAnyAlignmentIsAnUnknownMotion) {
   EXPECT_LT((r.pose_covariance - Ad * Ad.transpose()).norm(), 1e-12);
 }
 
+// A sensor that starts blank: the frames before the first with points have nothing to be
+// aligned to and stay at the initial pose, unknown; the first frame with points is keyframe 0,
+// the gauge, exact; the next one aligns with it.
+TEST(KeyframeTracker, ABlankStartMovesTheGaugeToTheFirstFrameWithPoints) {
+  const SyntheticSequence seq = rail(4);
+  const Eigen::Isometry3d start = seq.ground_truth(0).value();
+  KeyframeTracker tracker(FrontendParams{}, start);
+  std::vector<TrackResult> r;
+  for (std::size_t i = 0; i < 4; ++i) {
+    Frame f = seq.load(i);
+    if (i < 2) f.depth = DepthImage(f.depth.width(), f.depth.height(), 0.0f);
+    r.push_back(tracker.track(f));
+    EXPECT_EQ(tracker.has_keyframe(), i >= 2) << "frame " << i;
+  }
+  const Matrix6d Ad = se3_adjoint(start);
+  for (int i = 0; i < 2; ++i) {
+    EXPECT_FALSE(r[i].is_keyframe);
+    EXPECT_FALSE(r[i].is_gauge);
+    EXPECT_TRUE(r[i].kept_last_motion);
+    EXPECT_EQ(r[i].reference, -1);
+    EXPECT_EQ(r[i].icp.verdict, IcpVerdict::too_few_points);
+    EXPECT_TRUE(r[i].T_wc.pose.isApprox(start, 0.0));
+    EXPECT_LT((r[i].pose_covariance - Ad * Ad.transpose()).norm(), 1e-12);
+  }
+  EXPECT_TRUE(r[2].is_keyframe);
+  EXPECT_TRUE(r[2].is_gauge);
+  EXPECT_FALSE(r[2].kept_last_motion);
+  EXPECT_EQ(r[2].reference, -1);
+  EXPECT_TRUE(r[2].T_wc.pose.isApprox(start, 0.0));
+  EXPECT_EQ(r[2].pose_covariance, Matrix6d::Zero());
+  EXPECT_EQ(tracker.keyframe_indices(), std::vector<int>{2});
+  EXPECT_EQ(r[3].reference, 2);
+  EXPECT_EQ(r[3].icp.verdict, IcpVerdict::ok) << to_string(r[3].icp.verdict);
+  // As a tracker started at frame 2 tracks frame 3, to the bit.
+  KeyframeTracker late(FrontendParams{}, start);
+  late.track(seq.load(2));
+  const TrackResult late_3 = late.track(seq.load(3));
+  EXPECT_TRUE(r[3].T_wc.pose.isApprox(late_3.T_wc.pose, 0.0));
+  EXPECT_EQ(r[3].pose_covariance, late_3.pose_covariance);
+}
+
 TEST(KeyframeTracker, WrongSizedFrameIsAnInputError) {
   KeyframeTracker tracker;
   Frame f;

@@ -153,13 +153,16 @@ int long_run_main(int argc, char** argv) {
     FinalFrames final_frames;  // reserved: the tool's own records must not count as growth
     final_frames.track_ms.reserve(static_cast<std::size_t>(frames));
     final_frames.refine_ms.reserve(static_cast<std::size_t>(frames));
-    pipeline.set_frame_sink(
-        [&](const PipelineFrame& f, const StampedPose&, const FrameVerdicts& v) {
-          const PipelineKeyframe& k = pipeline.keyframe(static_cast<std::size_t>(f.keyframe));
-          final_frames.track_ms.push_back(f.track_ms);
-          final_frames.refine_ms.push_back(k.frame == f.index ? k.refine_ms : NAN);
-          if (!v.trusted()) ++final_frames.untrusted;
-        });
+    pipeline.set_frame_sink([&](const PipelineFrame& f, const StampedPose&,
+                                const FrameVerdicts& v) {
+      final_frames.track_ms.push_back(f.track_ms);
+      const bool is_keyframe =
+          f.keyframe >= 0 &&
+          pipeline.keyframe(static_cast<std::size_t>(f.keyframe)).frame == f.index;
+      final_frames.refine_ms.push_back(
+          is_keyframe ? pipeline.keyframe(static_cast<std::size_t>(f.keyframe)).refine_ms : NAN);
+      if (!v.trusted()) ++final_frames.untrusted;
+    });
     std::vector<double> ms(static_cast<std::size_t>(frames));
     // Memory is sampled every `kSampleEvery` frames: the peak over the first block after the
     // warm-up against the peak over the last block (what a window holds varies from sample to
