@@ -27,6 +27,7 @@ struct ReceivedImage {
 // A camera_info as taken from Cyclone, or the problem that rejects it.
 struct ReceivedCamera {
   std::optional<CameraIntrinsics> camera;
+  bool lens_distortion = false;  // D has a non-zero term (not applied: logged once)
   std::string frame_id;
   std::string problem;
 };
@@ -114,7 +115,9 @@ struct DdsDepthSubscriber::State {
       ReceivedCamera r;
       try {
         if (m.header.frame_id != nullptr) r.frame_id = m.header.frame_id;
-        r.camera = decode_camera_info(camera_info_of(m), s.limits);
+        const RosCameraInfo info = camera_info_of(m);
+        r.camera = decode_camera_info(info, s.limits);
+        r.lens_distortion = lens_distortion(info);
       } catch (const std::exception& e) {
         r.problem = e.what();
       }
@@ -262,7 +265,7 @@ void DdsDepthSubscriber::process() {
     } else if (c.camera) {
       s.camera = c.camera;
       if (!c.frame_id.empty()) camera_info_frame_id_ = c.frame_id;
-      if (c.camera->has_distortion() && !distortion_logged_) {
+      if (c.lens_distortion && !distortion_logged_) {
         distortion_logged_ = true;
         *log_ << "jpcr dds: " << config_.camera_info_topic
               << ": the camera has lens distortion, which is not applied: the depth is used as"

@@ -270,25 +270,28 @@ CameraIntrinsics decode_camera_info(const RosCameraInfo& info, const RosImageLim
   camera.cy = k[5];
   camera.width = static_cast<int>(info.width);
   camera.height = static_cast<int>(info.height);
+  // D describes the raw image and is not applied (the image is the rectified one), so any
+  // model is taken: plumb_bob's and rational_polynomial's k1, k2, p1, p2, k3 are kept (OpenCV's
+  // order, for the caller's log), and the rest (a fisheye's, rational_polynomial's k4-k6) is
+  // not, which lens_distortion() still sees.
   camera.distortion = {};
   const std::string& model = info.distortion_model;
-  const bool known_model = model == "plumb_bob" || model == "rational_polynomial" || model.empty();
-  if (!known_model) reject("camera_info distortion model " + quoted(model) + " is not supported");
-  for (std::size_t i = 0; i < info.d.size(); ++i) {
-    if (!std::isfinite(info.d[i])) reject("camera_info D is not finite");
-    if (i < camera.distortion.size()) {
+  for (const double d : info.d)
+    if (!std::isfinite(d)) reject("camera_info D is not finite");
+  if (model == "plumb_bob" || model == "rational_polynomial") {
+    for (std::size_t i = 0; i < std::min(info.d.size(), camera.distortion.size()); ++i)
       camera.distortion[i] = info.d[i];
-    } else if (info.d[i] != 0.0) {
-      reject("camera_info D has non-zero terms beyond k3 (only k1, k2, p1, p2, k3 are supported)");
-    }
   }
-  if (model.empty() && camera.has_distortion()) reject("camera_info D without a distortion model");
   try {
     camera.validate();  // e.g. a focal length giving a field of view of 180°
   } catch (const std::invalid_argument& e) {
     reject(std::string("camera_info ") + e.what());
   }
   return camera;
+}
+
+bool lens_distortion(const RosCameraInfo& info) {
+  return std::any_of(info.d.begin(), info.d.end(), [](double d) { return d != 0.0; });
 }
 
 Frame decode_depth_frame(const RosImageView& image, const RosStamp& stamp,

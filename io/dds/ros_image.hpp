@@ -105,11 +105,14 @@ std::size_t check_image_layout(
 DepthImage decode_depth_image(const RosImageView& image, const RosImageLimits& limits);
 
 /// Intrinsics of the rectified image from a CameraInfo: fx, fy, cx, cy from P (from K when P is
-/// all zero, as an uncalibrated driver sends it); distortion from D ("plumb_bob" or
-/// "rational_polynomial" with zero terms beyond k3, or none), which jpcr does not apply. Throws
-/// InputError on a zero size, non-finite or non-positive focal lengths, a P or K that is not a
-/// pinhole matrix, binning, or an unsupported distortion.
+/// all zero, as an uncalibrated driver sends it). D describes the raw image, and jpcr does not
+/// apply it: any model is taken, and `distortion` holds k1, k2, p1, p2, k3 of "plumb_bob" and
+/// "rational_polynomial" (zero for other models). Throws InputError on a zero size, non-finite
+/// values, non-positive focal lengths, a P or K that is not a pinhole matrix, or binning.
 CameraIntrinsics decode_camera_info(const RosCameraInfo& info, const RosImageLimits& limits);
+
+/// Whether D has any non-zero term, whatever its model (the raw image has lens distortion).
+bool lens_distortion(const RosCameraInfo& info);
 
 /// A depth frame: the image decoded and checked against the camera's size. `camera.depth_scale`
 /// is set to the encoding's raw units per metre (1000 for 16UC1, 1 for 32FC1).

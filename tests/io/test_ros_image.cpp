@@ -2,10 +2,13 @@
 // malformed case is rejected with a message naming the problem.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <limits>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "input_error.hpp"
 #include "jpcr/io/dds/ros_image.hpp"
@@ -305,23 +308,36 @@ TEST(RosCameraInfo, MalformedCameraInfoIsRejected) {
   EXPECT_EQ(error([](RosCameraInfo& i) { i.width = 0; }), "camera_info has zero size 0x60");
   EXPECT_EQ(error([](RosCameraInfo& i) { i.binning_x = 2; }),
             "camera_info binning is not supported");
-  EXPECT_EQ(error([](RosCameraInfo& i) { i.distortion_model = "equidistant"; }),
-            "camera_info distortion model 'equidistant' is not supported");
   EXPECT_EQ(error([](RosCameraInfo& i) {
-              i.distortion_model = "rational_polynomial";
-              i.d = {0, 0, 0, 0, 0, 0.5, 0, 0};
+              i.d = {0.1, std::nan("")};
             }),
-            "camera_info D has non-zero terms beyond k3 (only k1, k2, p1, p2, k3 are supported)");
-  EXPECT_EQ(error([](RosCameraInfo& i) {
-              i.distortion_model = "";
-              i.d = {0.1};
-            }),
-            "camera_info D without a distortion model");
-  EXPECT_EQ(error([](RosCameraInfo& i) {
-              i.distortion_model = "";
-              i.d.clear();
-            }),
-            "<no error>");
+            "camera_info D is not finite");
+}
+
+// D describes the raw image, which jpcr does not read (the depth is the rectified image, the
+// intrinsics P's): every model is taken, as a driver sends it, and the lens distortion is seen
+// for the log. A fisheye's or an 8-term rational_polynomial's D was rejected, and such a camera
+// could not be used at all (review).
+TEST(RosCameraInfo, AnyDistortionModelIsTakenAndNotApplied) {
+  const RosCameraInfo good = encode_camera_info(small_camera(80, 60));
+  const CameraIntrinsics expected = decode_camera_info(good, {});
+  EXPECT_FALSE(lens_distortion(good));
+  const auto taken = [&](const std::string& model, const std::vector<double>& d) {
+    RosCameraInfo info = good;
+    info.distortion_model = model;
+    info.d = d;
+    const CameraIntrinsics c = decode_camera_info(info, {});
+    EXPECT_EQ(c.fx, expected.fx);
+    EXPECT_EQ(c.cx, expected.cx);
+    EXPECT_TRUE(lens_distortion(info)) << model;
+    return c.distortion;
+  };
+  using D = std::array<double, 5>;
+  EXPECT_EQ(taken("equidistant", {0.1, 0.02, 0.003, 0.0004}), (D{}));
+  EXPECT_EQ(taken("rational_polynomial", {0.5, -0.1, 0.001, 0.002, 0.03, 0.4, -0.05, 0.01}),
+            (D{0.5, -0.1, 0.001, 0.002, 0.03}));
+  EXPECT_EQ(taken("", {0.1}), (D{}));
+  EXPECT_EQ(taken("plumb_bob", {0.0, 0.0, 0.0, 0.0, 0.0, 0.7}), (D{}));
 }
 
 TEST(RosDepthFrame, FrameMatchesTheCameraAndTheStamp) {
