@@ -94,9 +94,33 @@ bool process_is_gone(long pid) {
   return ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
 }
 
+std::string output_file_target(const std::string& path) {
+  std::error_code ec;
+  const fs::file_status own = fs::symlink_status(path, ec);
+  if (ec || !fs::exists(own) || fs::is_regular_file(own)) return path;
+  const auto refuse = [&](const std::string& what) {
+    return InputError(path + ": " + what + "; jpcr writes a whole new file and renames it into " +
+                      "place: give the path of a regular file, or of none");
+  };
+  if (fs::is_symlink(own)) {
+    const fs::file_status target = fs::status(path, ec);
+    if (ec && ec != std::errc::no_such_file_or_directory)
+      throw refuse("a symbolic link that cannot be followed (" + ec.message() + ")");
+    if (!fs::exists(target)) throw refuse("a symbolic link to nothing");
+    if (!fs::is_regular_file(target)) throw refuse("a symbolic link to no regular file");
+    const fs::path resolved = fs::canonical(path, ec);
+    if (ec) throw refuse("a symbolic link that cannot be followed (" + ec.message() + ")");
+    return resolved.string();
+  }
+  if (fs::is_directory(own)) throw InputError(path + ": names a directory, not a file to write");
+  throw refuse("exists and is no regular file (a device, a pipe or a socket)");
+}
+
 void write_file_atomically(const std::string& path,
                            const std::function<void(std::ostream&)>& write) {
-  const std::string tmp = temporary_name(path);
+  // Errors name the path given; the file replaced is the one a link leads to.
+  const std::string target = output_file_target(path);
+  const std::string tmp = temporary_name(target);
   try {
     {
       std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
@@ -117,14 +141,14 @@ void write_file_atomically(const std::string& path,
     const int error = sync_to_disk(tmp);
     if (error != 0 && error != EINVAL)
       throw InputError(path + ": cannot be flushed to the disk (" + std::strerror(error) + ")");
-    if (std::rename(tmp.c_str(), path.c_str()) != 0) {
+    if (std::rename(tmp.c_str(), target.c_str()) != 0) {
       throw InputError(path + ": cannot be renamed into place (" + std::strerror(errno) + ")");
     }
   } catch (...) {
     std::remove(tmp.c_str());
     throw;
   }
-  remove_abandoned_temporaries(fs::path(path).parent_path());
+  remove_abandoned_temporaries(fs::path(target).parent_path());
 }
 
 void ensure_directory(const std::string& dir) {

@@ -14,10 +14,18 @@ namespace jpcr {
 
 /// Calls write(stream) on a temporary file next to `path`, then renames it to `path`. If write
 /// throws or the stream fails, the temporary file is removed and `path` is left untouched.
-/// Throws InputError naming the file when it cannot be written. The first call for a directory
-/// in a process removes the temporaries there of processes that no longer exist.
+/// Throws InputError naming the file when it cannot be written, and before writing anything
+/// when output_file_target refuses `path`. The first call for a directory in a process removes
+/// the temporaries there of processes that no longer exist.
 void write_file_atomically(const std::string& path,
                            const std::function<void(std::ostream&)>& write);
+
+/// The file a whole-file write to `path` replaces: `path` itself when nothing is there or a
+/// regular file is; the regular file a symbolic link leads to (the link stays). Throws
+/// InputError naming `path` for anything else: a device, a pipe, a socket or a directory (a
+/// rename would replace it: `--out /dev/null` as root deleted the device node), a link that
+/// leads nowhere or in a loop. For the checks before a run and for write_file_atomically.
+std::string output_file_target(const std::string& path);
 
 /// Whether `pid` names no process (kill(pid, 0) fails with ESRCH): what a process of that PID
 /// left behind is abandoned. A live PID, this process's and one this process may not signal are

@@ -53,6 +53,11 @@ StagedOutput::StagedOutput(std::string target, std::vector<std::string> layout)
   std::error_code ec;
   if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
     throw InputError(target_ + ": output path exists and is not a directory");
+  // A link that leads nowhere, or in a loop, would be refused only at commit(), after the run.
+  if (fs::is_symlink(fs::symlink_status(target_, ec)) && !fs::is_directory(target_, ec))
+    throw InputError(target_ + ": a symbolic link to no directory (" +
+                     (ec ? ec.message() : std::string("it leads nowhere")) +
+                     "): give the path of a directory, or of none");
   fs::path t = fs::path(target_).lexically_normal();
   if (t.filename().empty()) t = t.parent_path();  // "out/" → "out"
   fs::path parent = t.has_parent_path() ? t.parent_path() : fs::path(".");

@@ -108,6 +108,44 @@ TEST(AtomicFile, ReadingSomethingOtherThanARegularFileIsAnInputError) {
     EXPECT_EQ(test::input_error_of([&] { read_file(path); }), path + ": not a regular file");
 }
 
+// A whole-file write renames a new file into place: over a device, a pipe or a link to one it
+// would replace them (as root, `jpcr_odometry --out /dev/null` deleted the device node). Those
+// are refused, untouched; a link to a regular file writes that file and stays a link.
+TEST(AtomicFile, OnlyRegularFilesAreReplaced) {
+  const test::TempDir dir;
+  const std::string fifo = dir.file("fifo");
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  const std::string to_fifo = dir.file("to_fifo"), nowhere = dir.file("nowhere"),
+                    loop = dir.file("loop"), to_dir = dir.file("to_dir");
+  std::filesystem::create_symlink(fifo, to_fifo);
+  std::filesystem::create_symlink(dir.file("missing"), nowhere);
+  std::filesystem::create_symlink(loop, loop);
+  std::filesystem::create_symlink(dir.path(), to_dir);
+  const auto write = [](const std::string& path) {
+    return test::input_error_of(
+        [&] { write_file_atomically(path, [](std::ostream& out) { out << "new"; }); });
+  };
+  const std::string why = "; jpcr writes a whole new file and renames it into place";
+  EXPECT_EQ(write(fifo).rfind(fifo + ": exists and is no regular file (a device, a pipe", 0), 0u);
+  EXPECT_EQ(write(to_fifo).rfind(to_fifo + ": a symbolic link to no regular file" + why, 0), 0u);
+  EXPECT_EQ(write(nowhere).rfind(nowhere + ": a symbolic link to nothing" + why, 0), 0u);
+  EXPECT_EQ(write(loop).rfind(loop + ": a symbolic link that cannot be followed", 0), 0u);
+  EXPECT_EQ(write(to_dir).rfind(to_dir + ": a symbolic link to no regular file", 0), 0u);
+  EXPECT_EQ(write(dir.path()), dir.path() + ": names a directory, not a file to write");
+  EXPECT_TRUE(std::filesystem::is_fifo(fifo));
+  EXPECT_EQ(write("/dev/null").rfind("/dev/null: exists and is no regular file", 0), 0u);
+  EXPECT_TRUE(std::filesystem::is_character_file("/dev/null"));
+
+  const std::string file = dir.write("file.txt", "old"), link = dir.file("link.txt");
+  std::filesystem::create_symlink(file, link);
+  EXPECT_EQ(output_file_target(link), std::filesystem::canonical(file).string());
+  EXPECT_EQ(output_file_target(file), file);
+  EXPECT_EQ(output_file_target(dir.file("new.txt")), dir.file("new.txt"));
+  write_file_atomically(link, [](std::ostream& out) { out << "through the link"; });
+  EXPECT_TRUE(std::filesystem::is_symlink(link));
+  EXPECT_EQ(read_file(file), "through the link");
+}
+
 TEST(AtomicFile, ReadMissingFileNamesIt) {
   try {
     read_file("/no/such/file.txt");

@@ -7,6 +7,7 @@
 
 #include <gtest/gtest.h>
 
+#include "input_error.hpp"
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/staged_output.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -240,6 +241,22 @@ TEST(StagedOutput, BadTargetsAreInputErrorsNamingThem) {
   }
   EXPECT_THROW(StagedOutput("", {}), InputError);
   EXPECT_THROW(StagedOutput(file + "/under_a_file", {}), InputError);
+  // Links that lead to no directory are refused before the run (they failed only at commit()).
+  const std::string nowhere = dir.file("nowhere"), loop = dir.file("loop");
+  std::filesystem::create_symlink(dir.file("missing"), nowhere);
+  std::filesystem::create_symlink(loop, loop);
+  EXPECT_EQ(test::input_error_of([&] {
+              StagedOutput out(nowhere, {});
+            }).rfind(nowhere + ": a symbolic link to no directory (", 0),
+            0u);
+  EXPECT_EQ(test::input_error_of([&] {
+              StagedOutput out(loop, {});
+            }).rfind(loop + ": a symbolic link to no directory (", 0),
+            0u);
+  const std::string to_dir = dir.file("to_dir");
+  std::filesystem::create_directory(dir.file("real"));
+  std::filesystem::create_symlink(dir.file("real"), to_dir);
+  EXPECT_NO_THROW(StagedOutput(to_dir, {}));
   // A parent where nothing can be created (not even by root): the message names the target.
   try {
     StagedOutput out("/proc/jpcr_out", {});

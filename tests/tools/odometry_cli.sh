@@ -112,4 +112,28 @@ expect 1 "/proc/jpcr_nowhere" -- "$odo" --dataset "$fr1" --config "$cam" --frame
   --out "$tmp/od3/t.txt" --summary /proc/jpcr_nowhere/s.json
 [ -e "$tmp/od3" ] && { echo "FAIL: an empty od3/ was left behind"; fail=1; }
 ls "$tmp" "$tmp/f2f" | grep -q '\.tmp\.' && { echo "FAIL: temporary file left behind"; fail=1; }
+# What a device, a pipe or a link to one at --out: refused before the run, left as it was (a
+# rename replaced them: as root, --out /dev/null deleted the device node).
+mkfifo "$tmp/pipe" && ln -s "$tmp/pipe" "$tmp/to_pipe" && ln -s "$tmp/none" "$tmp/dangling"
+expect 1 "pipe: exists and is no regular file (a device, a pipe or a socket)" -- \
+  "$odo" --dataset "$fr1" --config "$cam" --frames 2 --out "$tmp/pipe"
+expect 1 "to_pipe: a symbolic link to no regular file" -- \
+  "$odo" --dataset "$fr1" --config "$cam" --frames 2 --out "$tmp/x.txt" --summary "$tmp/to_pipe"
+expect 1 "dangling: a symbolic link to nothing" -- \
+  "$odo" --dataset "$fr1" --config "$cam" --frames 2 --out "$tmp/dangling"
+[ -p "$tmp/pipe" ] && [ -L "$tmp/to_pipe" ] || { echo "FAIL: the pipe or its link was replaced"; fail=1; }
+[ -e "$tmp/x.txt" ] && { echo "FAIL: --out written beside a refused --summary"; fail=1; }
+# A link to a regular file writes that file, and stays a link.
+echo old > "$tmp/real.txt" && ln -s "$tmp/real.txt" "$tmp/link.txt"
+expect 0 "wrote 2 poses" -- "$odo" --dataset "$fr1" --config "$cam" --frames 2 --out "$tmp/link.txt"
+[ -L "$tmp/link.txt" ] && [ "$(grep -vc '^#' "$tmp/real.txt")" = 2 ] \
+  || { echo "FAIL: the link was replaced or its file not written"; fail=1; }
+# A run killed outright left its copies (PID gone): the next run removes them, and puts the
+# earlier trajectory back where the kill left none.
+gone=4194303
+echo new > "$tmp/k.txt.partial-$gone" && echo new > "$tmp/k.txt.json.partial-$gone"
+echo earlier > "$tmp/k.txt.previous-$gone"
+expect 1 "no_such_dataset" -- "$odo" --dataset "$tmp/no_such_dataset" --out "$tmp/k.txt"
+[ "$(cat "$tmp/k.txt" 2>/dev/null)" = earlier ] || { echo "FAIL: the earlier k.txt not put back"; fail=1; }
+ls "$tmp" | grep -q 'k\.txt.*-'"$gone" && { echo "FAIL: a killed run's copies left"; fail=1; }
 exit $fail

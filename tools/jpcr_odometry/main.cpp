@@ -45,6 +45,34 @@ struct Run {
 // Makes the missing parent directories of `files` and returns them, deepest first, for a run
 // that fails later to remove; when one cannot be made, removes those it made before throwing,
 // so a failed run leaves no empty directory behind.
+// What a run killed outright (SIGKILL) left beside `file` (below): FILE.partial-PID, its new
+// file never moved in, and FILE.previous-PID, the earlier file's second name or the earlier file
+// moved aside, of a PID that is gone. A previous copy goes back when FILE is missing (killed
+// between moving it aside and moving the new one in); the rest is removed. Best effort.
+void clean_up_after_killed_runs(const std::string& file) {
+  namespace fs = std::filesystem;
+  const fs::path target(file);
+  const std::string name = target.filename().string();
+  std::error_code ec;
+  fs::directory_iterator it(target.has_parent_path() ? target.parent_path() : fs::path("."), ec);
+  for (; !ec && it != fs::directory_iterator(); it.increment(ec)) {
+    const std::string entry = it->path().filename().string();
+    for (const std::string tag : {".partial-", ".previous-"}) {
+      if (entry.rfind(name + tag, 0) != 0) continue;
+      const std::string pid = entry.substr(name.size() + tag.size());
+      if (pid.empty() || pid.size() > 9 ||
+          pid.find_first_not_of("0123456789") != std::string::npos ||
+          !process_is_gone(std::stol(pid)))
+        continue;
+      std::error_code ignored;
+      if (tag == ".previous-" && !fs::exists(fs::symlink_status(target, ignored)))
+        fs::rename(it->path(), target, ignored);
+      else
+        fs::remove(it->path(), ignored);
+    }
+  }
+}
+
 std::vector<std::filesystem::path> make_parents(const std::vector<std::string>& files) {
   namespace fs = std::filesystem;
   std::vector<fs::path> made;
@@ -78,7 +106,7 @@ void write_summary(std::ostream& out, const Run& run) {
   int kept = 0;
   double preprocess = 0.0, icp = 0.0;
   for (const TrackResult& r : run.frames) {
-    if (r.index > 0) ++verdicts[to_string(r.icp.verdict)];
+    if (!r.is_gauge) ++verdicts[to_string(r.icp.verdict)];
     kept += r.kept_last_motion ? 1 : 0;
     preprocess += r.preprocess_ms;
     icp += r.icp_ms;
@@ -107,7 +135,7 @@ void write_summary(std::ostream& out, const Run& run) {
     json.begin_object();
     json.field("index", r.index).field("timestamp", r.T_wc.timestamp);
     json.field("reference", r.reference);
-    json.field("verdict", r.index == 0 ? "first" : to_string(r.icp.verdict));
+    json.field("verdict", r.is_gauge ? "first" : to_string(r.icp.verdict));  // first with points
     json.field("iterations", r.icp.iterations).field("converged", r.icp.converged);
     json.field("rms_m", r.icp.rms).field("inlier_ratio", r.icp.inlier_ratio);
     json.field("degeneracy", r.icp.degeneracy).field("overlap", r.overlap);
@@ -165,8 +193,13 @@ int run(int argc, char** argv) {
     }
     const int limit = args.get_int("frames");
     if (limit < 0) throw cli::UsageError("--frames must be >= 0");
-    const std::string out = args.get("out");
-    const std::string summary = args.has("summary") ? args.get("summary") : out + ".json";
+    // The files replaced: the paths given, or the regular files links lead to (a device, a pipe
+    // or a link to nothing is refused here, before the run: see output_file_target).
+    const std::string out = output_file_target(args.get("out"));
+    const std::string summary =
+        output_file_target(args.has("summary") ? args.get("summary") : args.get("out") + ".json");
+    for (const std::string& file : {out, summary})
+      clean_up_after_killed_runs(file);
     // Before the run, so it fails early. Absolute first: weakly_canonical leaves a relative path
     // that does not exist yet relative, so "o.txt" and "./o.txt" compared unequal.
     // A path that cannot be resolved (a link loop) gives an empty one: compare it as written,
@@ -269,6 +302,13 @@ int run(int argc, char** argv) {
     try {
       write_trajectory(staged, trajectory, "jpcr_odometry " + run.mode + " on " + dataset);
       write_file_atomically(staged_summary, [&](std::ostream& s) { write_summary(s, run); });
+    } catch (const InputError& e) {
+      clean_up();
+      // Named by the files asked for, not by their staged copies (gone when the user reads it).
+      std::string why = e.what();
+      for (const auto& [from, to] : {std::pair{staged, out}, std::pair{staged_summary, summary}})
+        if (why.rfind(from + ":", 0) == 0) why = to + why.substr(from.size());
+      throw InputError(why + " (nothing written)");
     } catch (...) {
       clean_up();
       throw;
