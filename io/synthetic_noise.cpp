@@ -65,8 +65,8 @@ void KinectNoiseParams::validate() const {
   const auto check = [](bool ok, const char* field, const char* why) {
     if (!ok) throw InputError(std::string(field) + ": " + why);
   };
-  check(sigma_constant >= 0.0 && sigma_quadratic >= 0.0, "sigma_constant",
-        "σ coefficients must be non-negative");
+  check(sigma_constant >= 0.0, "sigma_constant", "must be non-negative (m)");
+  check(sigma_quadratic >= 0.0, "sigma_quadratic", "must be non-negative (1/m)");
   check(std::isfinite(sigma_offset), "sigma_offset", "must be finite (m)");
   check(baseline > 0.0 && std::isfinite(baseline), "baseline", "must be positive (m)");
   check(disparity_focal > 0.0 && std::isfinite(disparity_focal), "disparity_focal",

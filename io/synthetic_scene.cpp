@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <set>
@@ -188,6 +189,29 @@ BoundingSphere bounding_sphere(const Surface& surface) {
   return std::visit([](const auto& s) { return jpcr::bounding_sphere(s); }, surface);
 }
 
+bool encloses(const Surface& surface, const Eigen::Vector3d& point) {
+  return std::visit([&](const auto& s) { return jpcr::encloses(s, point); }, surface);
+}
+
+void check_cameras_outside_solids(const SyntheticScene& scene, const Trajectory& trajectory) {
+  static const char* const kTypes[] = {"plane", "sphere", "cylinder", "torus", "box"};
+  for (std::size_t k = 0; k < scene.surfaces.size(); ++k) {
+    const Surface& surface = scene.surfaces[k];
+    if (encloses(surface, scene.view.eye)) continue;  // the room the scene is seen from
+    for (std::size_t i = 0; i < trajectory.size(); ++i) {
+      const Eigen::Vector3d eye = trajectory[i].pose.translation();
+      if (!encloses(surface, eye)) continue;
+      char where[96];
+      std::snprintf(where, sizeof where, "(%.3f, %.3f, %.3f)", eye.x(), eye.y(), eye.z());
+      throw InputError("scene " + scene.name + ": the camera of frame " + std::to_string(i) +
+                       " at " + where + " m is inside surface " + std::to_string(k) + " (a " +
+                       kTypes[surface.index()] +
+                       "): the trajectory leaves the free space (try another seed, fewer "
+                       "frames or another trajectory)");
+    }
+  }
+}
+
 SyntheticScene parse_scene(const std::string& yaml_text, const std::string& file,
                            const std::string& name) {
   const YAML::Node root = parse_yaml(yaml_text, file);
@@ -227,7 +251,9 @@ std::string find_scene_file(const std::string& name_or_path) {
   std::error_code ec;
   if (is_path(name_or_path)) {
     if (!fs::is_regular_file(name_or_path, ec)) {
-      throw InputError(name_or_path + ": scene file does not exist");
+      throw InputError(name_or_path + (fs::exists(name_or_path, ec)
+                                           ? ": is no scene file (a directory or a device?)"
+                                           : ": scene file does not exist"));
     }
     return name_or_path;
   }

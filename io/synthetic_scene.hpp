@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "jpcr/io/synthetic_surfaces.hpp"
+#include "jpcr/quadric/frame.hpp"
 
 namespace jpcr {
 
@@ -71,6 +72,13 @@ std::optional<SurfaceHit> cast_ray(const SyntheticScene& scene, const Ray& ray,
                                    const std::vector<int>& candidates, double t_min = 0.0);
 
 BoundingSphere bounding_sphere(const Surface& surface);
+bool encloses(const Surface& surface, const Eigen::Vector3d& point);
+
+/// Throws InputError when a camera of `trajectory` lies inside a solid of the scene that does
+/// not enclose the scene's own eye (a room does; a ball, a crate, a tyre does not): the
+/// renderer would show the solid's inside with exact ground truth (a walk of torus_saddle,
+/// seed 385, ends inside a ball). Names the frame, the surface and its index.
+void check_cameras_outside_solids(const SyntheticScene& scene, const Trajectory& trajectory);
 
 /// Loads a scene by name (NAME → NAME.yaml in scene_search_path()) or by path (anything with a
 /// '/' or a .yaml/.yml suffix). Throws InputError naming the file and key on a bad scene, and

@@ -15,6 +15,7 @@ SyntheticSequence::SyntheticSequence(SyntheticScene scene, const CameraIntrinsic
       seed_(seed) {
   if (trajectory_.empty()) throw InputError("a synthetic sequence needs at least one pose");
   check_synthetic_camera(camera_);
+  check_cameras_outside_solids(scene_, trajectory_);
 }
 
 std::string SyntheticSequence::description() const {

@@ -267,6 +267,34 @@ std::optional<SurfacePoint> intersect(const Torus& torus, const Ray& ray, double
   return std::nullopt;
 }
 
+bool encloses(const Plane&, const Eigen::Vector3d&) {
+  return false;
+}
+
+bool encloses(const Sphere& sphere, const Eigen::Vector3d& point) {
+  return (point - sphere.center).norm() < sphere.radius;
+}
+
+bool encloses(const Cylinder& cylinder, const Eigen::Vector3d& point) {
+  if (cylinder.length <= 0.0 || !cylinder.capped) return false;
+  const Eigen::Vector3d d = point - cylinder.center;
+  const double along = d.dot(cylinder.axis);
+  return std::abs(along) < 0.5 * cylinder.length &&
+         (d - along * cylinder.axis).norm() < cylinder.radius;
+}
+
+bool encloses(const Torus& torus, const Eigen::Vector3d& point) {
+  const Eigen::Vector3d d = point - torus.center;
+  const double along = d.dot(torus.axis);
+  const double from_ring = (d - along * torus.axis).norm() - torus.major_radius;
+  return from_ring * from_ring + along * along < torus.minor_radius * torus.minor_radius;
+}
+
+bool encloses(const Box& box, const Eigen::Vector3d& point) {
+  const Eigen::Vector3d local = box.rotation.transpose() * (point - box.center);
+  return (local.cwiseAbs().array() < 0.5 * box.size.array()).all();
+}
+
 BoundingSphere bounding_sphere(const Plane& plane) {
   return {plane.point, std::numeric_limits<double>::infinity()};
 }

@@ -74,6 +74,14 @@ std::optional<SurfacePoint> intersect(const Cylinder& cylinder, const Ray& ray, 
 std::optional<SurfacePoint> intersect(const Torus& torus, const Ray& ray, double t_min);
 std::optional<SurfacePoint> intersect(const Box& box, const Ray& ray, double t_min);
 
+/// Whether `point` lies strictly inside the solid a closed surface bounds: a sphere, a torus, a
+/// box, a finite capped cylinder. Planes, open tubes and infinite cylinders bound none: false.
+bool encloses(const Plane& plane, const Eigen::Vector3d& point);
+bool encloses(const Sphere& sphere, const Eigen::Vector3d& point);
+bool encloses(const Cylinder& cylinder, const Eigen::Vector3d& point);
+bool encloses(const Torus& torus, const Eigen::Vector3d& point);
+bool encloses(const Box& box, const Eigen::Vector3d& point);
+
 /// A sphere that encloses a bounded surface (for culling); radius is infinite for planes and
 /// infinite cylinders.
 struct BoundingSphere {

@@ -98,9 +98,18 @@ void TrajectoryParams::validate() const {
   positive(orbit_step, "orbit_step", "deg");
   positive(walk_max_speed, "walk_max_speed", "m/s");
   positive(walk_max_head_rate, "walk_max_head_rate", "deg/s");
-  positive(walk_min_period, "walk_min_period", "s");
+  // The walk's speed bound scales its amplitudes by 1 / Σ amplitude · 2π / period: periods far
+  // out of this range gave an infinite scale (NaN poses, refused only when written) or a zero
+  // one (a camera standing still).
+  constexpr double kMinPeriod = 1e-3, kMaxPeriod = 1e6;  // s
+  const auto period = [&](double v, const char* name) {
+    if (!(v >= kMinPeriod && v <= kMaxPeriod))
+      throw InputError(std::string(name) + ": must be in [0.001, 1e6] s");
+  };
+  period(walk_min_period, "walk_min_period");
+  period(walk_max_period, "walk_max_period");
   if (!std::isfinite(start_time)) throw InputError("start_time: must be finite (s)");
-  if (!(walk_max_period >= walk_min_period && std::isfinite(walk_max_period))) {
+  if (!(walk_max_period >= walk_min_period)) {
     throw InputError("walk_max_period: must be at least walk_min_period (s)");
   }
 }

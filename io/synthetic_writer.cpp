@@ -33,6 +33,14 @@ void check_directory(const std::string& directory, bool force) {
       throw InputError(directory +
                        ": output directory is not empty (use --force to write into it)");
     }
+    // --force replaces the entries written; TUM readers take an associations.txt before
+    // depth.txt and rgb.txt, and an old one would pair the old frames (gone) or only some.
+    const fs::path associations = fs::path(directory) / "associations.txt";
+    if (fs::exists(associations, ec)) {
+      throw InputError(associations.string() +
+                       ": would stay beside the new depth.txt and rgb.txt, and readers take it "
+                       "first (remove it, or write elsewhere)");
+    }
   }
 }
 

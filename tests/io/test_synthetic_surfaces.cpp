@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 
 #include "jpcr/io/synthetic_scene.hpp"
 
@@ -259,6 +260,30 @@ TEST(SyntheticSurfaces, TorusClosedFormAtKnownPoints) {
   EXPECT_NEAR(hit->curvature.y(), -4.0, 1e-9);
   // Through the hole along the axis: nothing.
   EXPECT_FALSE(cast_ray(scene_of({torus}), Ray{{0, 0, 3}, {0, 0, -1}}));
+}
+
+// Inside the solid a closed surface bounds; planes, open tubes and infinite cylinders bound none.
+TEST(SyntheticSurfaces, EnclosesIsTheInsideOfClosedSurfaces) {
+  const Eigen::Vector3d o = Eigen::Vector3d::Zero(), x = Eigen::Vector3d::UnitX(),
+                        z = Eigen::Vector3d::UnitZ();
+  EXPECT_TRUE(encloses(Sphere{o, 1.0}, 0.99 * x));
+  EXPECT_FALSE(encloses(Sphere{o, 1.0}, 1.01 * x));
+  const Cylinder can{o, z, 0.5, 2.0, true};
+  EXPECT_TRUE(encloses(can, 0.49 * x + 0.99 * z));
+  EXPECT_FALSE(encloses(can, 0.51 * x));
+  EXPECT_FALSE(encloses(can, 1.01 * z));
+  EXPECT_FALSE(encloses(Cylinder{o, z, 0.5, 2.0, false}, o));  // an open tube
+  EXPECT_FALSE(encloses(Cylinder{o, z, 0.5, 0.0, true}, o));   // infinite
+  const Torus tyre{o, z, 1.0, 0.25};
+  EXPECT_TRUE(encloses(tyre, 1.2 * x + 0.1 * z));
+  EXPECT_FALSE(encloses(tyre, o));  // the hole
+  EXPECT_FALSE(encloses(tyre, 1.0 * x + 0.26 * z));
+  Box crate{o, Eigen::Vector3d(2.0, 1.0, 1.0), Eigen::Matrix3d::Identity()};
+  EXPECT_TRUE(encloses(crate, 0.9 * x));
+  crate.rotation = Eigen::AngleAxisd(EIGEN_PI / 2, z).toRotationMatrix();  // long side along y
+  EXPECT_FALSE(encloses(crate, 0.9 * x));
+  EXPECT_TRUE(encloses(crate, 0.9 * Eigen::Vector3d::UnitY()));
+  EXPECT_FALSE(encloses(Plane{o, z}, -z));
 }
 
 TEST(SyntheticSurfaces, BoundingSpheresEncloseTheSurfaces) {

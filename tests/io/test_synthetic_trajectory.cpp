@@ -1,5 +1,6 @@
 // Trajectories: the rail's exact 10 mm translation-only steps, the orbit's geometry, and the
 // random walk's bounds (derived from its construction), smoothness and determinism.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 
@@ -147,6 +148,23 @@ TEST(SyntheticTrajectory, BadInput) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("walk_max_period"), std::string::npos);
   }
+  // Periods far out of range made the walk's scale infinite (NaN poses) or zero (no motion).
+  for (const double period : {1e300, 1e-300, 2e6}) {
+    p = TrajectoryParams{};
+    p.walk_min_period = period;
+    p.walk_max_period = std::max(period, p.walk_max_period);
+    try {
+      make_trajectory(TrajectoryKind::kWalk, view(), 5, p);
+      ADD_FAILURE() << "no error for a period of " << period << " s";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("walk_min_period: must be in [0.001, 1e6] s"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  p = TrajectoryParams{};
+  p.walk_max_period = 1e300;
+  EXPECT_THROW(make_trajectory(TrajectoryKind::kWalk, view(), 5, p), InputError);
 }
 
 }  // namespace

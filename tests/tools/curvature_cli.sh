@@ -90,6 +90,9 @@ printf 'quadric:\n  fit:\n    iterations: many\n' > "$tmp/bad.yaml"
 expect 1 "iterations" -- "$curv" --dataset "$tmp/seq" --params "$tmp/bad.yaml" --out "$tmp/x"
 expect 2 "--out needs a non-empty value" -- "$curv" --dataset "$tmp/seq" --out ""
 expect 2 "color-scale must be a positive finite" -- "$curv" --dataset "$tmp/seq" --color-scale inf --out "$tmp/x"
+# A command line's numbers are plain decimal tokens (strtod read "0x10" as 16, " 3" as 3).
+expect 2 "--color-scale expects a number, got '0x10'" -- "$curv" --dataset "$tmp/seq" \
+  --color-scale 0x10 --out "$tmp/x"
 # OUT = the dataset would replace its curvature/ ground truth: refused, the truth kept (the
 # trailing slash and ".." name the same directory).
 cp "$tmp/seq/curvature/0.000000.npy" "$tmp/truth.npy"

@@ -86,7 +86,13 @@ expect 2 "frames must be in 1..1000000" -- "$synth" --frames 0 --out "$tmp/x"
 expect 2 "frames must be in 1..1000000" -- "$synth" --frames 2000000000 --out "$tmp/x"
 expect 1 "scene 'nosuch' not found" -- "$synth" --scene nosuch --out "$tmp/x"
 expect 1 "bad.yaml:3: key 'surfaces\[0\].radius': must be positive" -- "$synth" --scene "$tmp/bad.yaml" --out "$tmp/x"
-expect 1 "distortion must be zero" -- "$synth" --config "$tmp/distorted.yaml" --frames 1 --out "$tmp/x"
+expect 1 "distorted.yaml: distortion: the synthetic renderer is an ideal pinhole" -- \
+  "$synth" --config "$tmp/distorted.yaml" --frames 1 --out "$tmp/x"
+# Out-of-range integers say so; a directory is no scene file.
+expect 2 "--seed is out of range (|n| <= 2147483647), got '4294967296'" -- \
+  "$synth" --seed 4294967296 --frames 1 --out "$tmp/x"
+expect 1 "is no scene file (a directory" -- "$synth" --scene "$tmp" --frames 1 --out "$tmp/x"
+expect 2 "--frames expects an integer, got ' 3'" -- "$synth" --frames " 3" --out "$tmp/x"
 # A depth scale the 16-bit PNG cannot carry the scene at (1 m steps; 6.5 cm of range).
 for scale in 1 1000000; do
   printf 'fx: 500\nfy: 500\ncx: 40\ncy: 30\nwidth: 80\nheight: 60\ndepth_scale: %s\n' "$scale" \
@@ -99,6 +105,13 @@ expect 1 "not empty (use --force" -- "$synth" --frames 1 --size 80x60 --out "$tm
 expect 0 "wrote 1 frames" -- "$synth" --frames 1 --size 80x60 --out "$tmp/rail" --force
 n=$(ls "$tmp/rail/depth" | wc -l)
 [ "$n" = 1 ] || { echo "FAIL: --force left $n depth frames (the earlier sequence's mixed in)"; fail=1; }
+# An associations.txt there would stay and shadow the new lists (readers take it first).
+cp "$tmp/rail/depth.txt" "$tmp/rail/associations.txt"
+expect 1 "associations.txt: would stay beside the new depth.txt and rgb.txt" -- \
+  "$synth" --frames 2 --size 80x60 --out "$tmp/rail" --force
+n=$(ls "$tmp/rail/depth" | wc -l)
+[ "$n" = 1 ] || { echo "FAIL: a refused --force run changed OUT ($n depth frames)"; fail=1; }
+rm "$tmp/rail/associations.txt"
 expect 2 "--out needs a non-empty value" -- "$synth" --frames 1 --out ""
 # An option given twice is refused, both values quoted, and nothing is written.
 expect 2 "--frames is given twice ('1', then '2')" -- "$synth" --frames 1 --out "$tmp/twice" --frames=2

@@ -1,5 +1,7 @@
 #include "cli/arguments.hpp"
 
+#include <cctype>
+#include <cerrno>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -112,11 +114,22 @@ std::string Arguments::get(const std::string& name) const {
   return spec->second.default_value;
 }
 
+namespace {
+
+// strtod and strtol skip leading white space and strtod reads hexadecimal ("0x10" is 16): a
+// command line's number is a plain decimal token.
+bool plain_token(const std::string& text) {
+  return !text.empty() && !std::isspace(static_cast<unsigned char>(text[0])) &&
+         text.find_first_of("xX") == std::string::npos;
+}
+
+}  // namespace
+
 double Arguments::get_double(const std::string& name) const {
   const std::string text = get(name);
   char* end = nullptr;
   const double v = std::strtod(text.c_str(), &end);
-  if (text.empty() || end != text.c_str() + text.size()) {
+  if (!plain_token(text) || end != text.c_str() + text.size()) {
     throw UsageError("--" + name + " expects a number, got '" + text + "'");
   }
   return v;
@@ -125,9 +138,13 @@ double Arguments::get_double(const std::string& name) const {
 int Arguments::get_int(const std::string& name) const {
   const std::string text = get(name);
   char* end = nullptr;
+  errno = 0;
   const long v = std::strtol(text.c_str(), &end, 10);
-  if (text.empty() || end != text.c_str() + text.size() || v < -2147483647L || v > 2147483647L) {
+  if (!plain_token(text) || end != text.c_str() + text.size()) {
     throw UsageError("--" + name + " expects an integer, got '" + text + "'");
+  }
+  if (errno == ERANGE || v < -2147483647L || v > 2147483647L) {
+    throw UsageError("--" + name + " is out of range (|n| <= 2147483647), got '" + text + "'");
   }
   return static_cast<int>(v);
 }

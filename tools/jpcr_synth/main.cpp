@@ -48,8 +48,9 @@ int run(int argc, char** argv) {
       .option("noise", "none | range:PCT (Gaussian along the ray, PCT % of the range) | kinect",
               "none")
       .option("size",
-              "image size WIDTHxHEIGHT; the camera is scaled to it (default: the camera's, "
-              "640x480)")
+              "image size WIDTHxHEIGHT; the camera is scaled to it, fx by the width's ratio and "
+              "fy by the height's (another aspect ratio than the camera's gives non-square "
+              "pixels; default: the camera's, 640x480)")
       .option("seed", "seed of the random walk and the noise (integer >= 0)", "0")
       .required("out", "output directory (created; must be empty unless --force)")
       .option("config", "camera YAML to render with (default: fx = fy = 550 at 640x480)")
@@ -82,6 +83,11 @@ int run(int argc, char** argv) {
     }
     CameraIntrinsics camera =
         args.has("config") ? load_camera_yaml(args.get("config")) : synthetic_camera();
+    if (camera.has_distortion()) {  // a real camera's file, e.g. configs/tum_fr1.yaml
+      throw InputError(args.get("config") +
+                       ": distortion: the synthetic renderer is an ideal pinhole; give a camera "
+                       "without distortion");
+    }
     int width = camera.width, height = camera.height;
     if (args.has("size")) cli::parse_image_size("size", args.get("size"), width, height);
     if (width != camera.width || height != camera.height) camera = camera.resized(width, height);
