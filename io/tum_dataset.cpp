@@ -28,7 +28,7 @@ std::vector<double> stamps(const std::vector<ListEntry>& entries) {
 void read_associations(const std::string& path, std::vector<ListEntry>& depth,
                        std::vector<std::optional<std::string>>& color) {
   const std::string text = read_file(path);
-  std::istringstream in(text);
+  std::istringstream in(without_utf8_bom(text));
   std::string line;
   int number = 0;
   std::string previous_line;
@@ -93,7 +93,10 @@ TumDataset::TumDataset(const std::string& directory, const CameraIntrinsics& cam
   // cost the run up to it.
   for (std::size_t i = 0; i < depth_.size(); ++i)
     if (!fs::is_regular_file(dir / depth_[i].path, ec))
-      throw InputError((dir / depth_[i].path).string() + ": file does not exist (frame " +
+      throw InputError((dir / depth_[i].path).string() +
+                       (fs::exists(dir / depth_[i].path, ec)
+                            ? ": not a regular file (a pipe, a device or a directory; frame "
+                            : ": file does not exist (frame ") +
                        std::to_string(i) + " of the " +
                        (fs::exists(associations, ec) ? "associations.txt" : "depth.txt") +
                        " list)");

@@ -49,9 +49,13 @@ void check_increasing(double previous, double current, bool has_previous, const 
 
 }  // namespace
 
+std::string without_utf8_bom(const std::string& text) {
+  return text.rfind("\xEF\xBB\xBF", 0) == 0 ? text.substr(3) : text;
+}
+
 std::vector<ListEntry> parse_file_list(const std::string& text, const std::string& name) {
   std::vector<ListEntry> entries;
-  std::istringstream in(text);
+  std::istringstream in(without_utf8_bom(text));
   std::string line;
   int number = 0;
   while (std::getline(in, line)) {
@@ -73,7 +77,7 @@ std::vector<ListEntry> read_file_list(const std::string& path) {
 
 Trajectory parse_trajectory(const std::string& text, const std::string& name) {
   Trajectory trajectory;
-  std::istringstream in(text);
+  std::istringstream in(without_utf8_bom(text));
   std::string line;
   int number = 0;
   while (std::getline(in, line)) {

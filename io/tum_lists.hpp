@@ -15,6 +15,11 @@ struct ListEntry {
   int line = 0;      // 1-based line in the list file, for messages
 };
 
+/// `text` without a leading UTF-8 byte-order mark (which Windows editors write): the lists and
+/// trajectories are read without it, where it made the first line "timestamp '﻿#' is not a
+/// number", naming an invisible character.
+std::string without_utf8_bom(const std::string& text);
+
 /// Parses a TUM file list. '#' lines are comments. Throws InputError "file:line: problem" on a
 /// malformed line, a non-finite timestamp, or timestamps that are not strictly increasing.
 std::vector<ListEntry> parse_file_list(const std::string& text, const std::string& name);

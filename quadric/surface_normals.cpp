@@ -102,6 +102,11 @@ class CleanWindows {
 void NormalEstimationParams::validate() const {
   if (half_window < 1 || half_window > 32) throw InputError("half_window: must be in [1, 32]");
   if (min_points < 3) throw InputError("min_points: must be at least 3");
+  const int window = (2 * half_window + 1) * (2 * half_window + 1);
+  if (min_points > window)  // no pixel could get a normal, nor a quadric
+    throw InputError("min_points: " + std::to_string(min_points) + " exceeds the " +
+                     std::to_string(window) + " points of the normals' window (half_window " +
+                     std::to_string(half_window) + ")");
   if (!(max_depth_jump > 0.0f))
     throw InputError("max_depth_jump: must be positive (fraction of depth)");
 }

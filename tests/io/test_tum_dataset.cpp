@@ -1,5 +1,7 @@
 // The TUM directory reader on the real fr1/xyz slice in tests/data, and every kind of bad input
 // the foundation issue lists: each is one clear InputError naming the file (and line).
+#include <sys/stat.h>
+
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -222,6 +224,14 @@ TEST(TumDataset, ListNamingAMissingPng) {
   EXPECT_NO_THROW(dataset.load(0));
   EXPECT_NE(error_of([&] { dataset.load(1); }).find("depth/1.png: file does not exist"),
             std::string::npos);
+  // A pipe where the PNG should be is there, but no file (it said "does not exist").
+  fs::remove(dir.file("depth/1.png"));
+  ASSERT_EQ(mkfifo(dir.file("depth/1.png").c_str(), 0600), 0);
+  EXPECT_NE(
+      error_of([&] { TumDataset(dir.path(), tiny_camera()); })
+          .find("depth/1.png: not a regular file (a pipe, a device or a directory; frame 1 of "
+                "the depth.txt list)"),
+      std::string::npos);
 }
 
 TEST(TumDataset, CorruptAndEightBitPngsAndWrongSize) {

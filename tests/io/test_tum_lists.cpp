@@ -33,6 +33,18 @@ TEST(FileList, ParsesCommentsAndEntries) {
   EXPECT_EQ(list[1].line, 5);
 }
 
+// Windows editors open a file with a UTF-8 byte-order mark; it is no part of the first line.
+TEST(FileList, AByteOrderMarkIsSkipped) {
+  const std::string bom = "\xEF\xBB\xBF";
+  const auto list = parse_file_list(bom + "# timestamp filename\n1.5 depth/1.5.png\n", "d.txt");
+  ASSERT_EQ(list.size(), 1u);
+  EXPECT_EQ(list[0].path, "depth/1.5.png");
+  const Trajectory t = parse_trajectory(bom + "2.0 1 2 3 0 0 0 1\n", "gt.txt");
+  ASSERT_EQ(t.size(), 1u);
+  EXPECT_EQ(t[0].timestamp, 2.0);
+  EXPECT_EQ(without_utf8_bom("\xEF\xBB"), "\xEF\xBB");  // a part of one is kept
+}
+
 TEST(FileList, RejectsUnsortedDuplicateAndMalformedLinesNamingFileAndLine) {
   EXPECT_NE(error_of([] {
               parse_file_list("2 a.png\n1 b.png\n", "depth.txt");

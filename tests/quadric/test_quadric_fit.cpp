@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "input_error.hpp"
 #include "jpcr/quadric/error.hpp"
 #include "jpcr/quadric/least_squares_quadric.hpp"
 #include "jpcr/quadric/quadric_fit.hpp"
@@ -183,6 +184,17 @@ TEST(QuadricFit, AScaledSceneGivesTheSameFitsWithCurvatureScaledInverse) {
   EXPECT_GT(valid, 60000);
   EXPECT_LE(differ, 5);
   EXPECT_LT(worst, 1e-3f);
+}
+
+// The same for the normals' window: with more points required than it holds, every pixel was
+// invalid and every J-ftf pair too_few_quadrics, the run exiting 0 (review).
+TEST(QuadricFit, NormalsMinPointsAboveTheWindowIsRefused) {
+  QuadricParams p;  // half_window 3: 49 points
+  p.normals.min_points = 49;
+  EXPECT_NO_THROW(p.validate());
+  p.normals.min_points = 50;
+  EXPECT_EQ(test::input_error_of([&] { p.validate(); }),
+            "min_points: 50 exceeds the 49 points of the normals' window (half_window 3)");
 }
 
 TEST(QuadricFit, MinSamplesAboveThePatternIsRefused) {

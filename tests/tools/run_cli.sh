@@ -68,6 +68,8 @@ expect 0 "warning: --window has no effect: method icp-ftf refines no windows" --
   --dataset "$tmp/seq" --method icp-ftf --window 7 --out "$tmp/icp"
 expect 0 "warning: --ply has no effect: method icp-ftf fits no quadrics" -- "$run" \
   --dataset "$tmp/seq" --method icp-ftf --ply --out "$tmp/icp"
+expect 0 "warning: --device has no effect: method icp-ftf runs on the CPU" -- "$run" \
+  --dataset "$tmp/seq" --method icp-ftf --device cuda --out "$tmp/icp"
 expect 0 "icp-ftf" -- "$run" --dataset "$tmp/seq" --method icp-ftf --out "$tmp/icp"
 n=$(ls "$tmp/icp/curvature" | wc -l)
 [ "$n" = 0 ] || { echo "FAIL: icp-ftf wrote $n curvature maps"; fail=1; }

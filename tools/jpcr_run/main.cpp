@@ -104,6 +104,13 @@ int run_main(int argc, char** argv) {
                        "writes every frame's pose and needs true");
     // Every option is checked before the dataset is opened (a rawlog's first read takes long).
     const ComputeDevice device = cli::device_from(args, params);
+    const bool has_j_ftf = pipeline.method == PipelineMethod::kJointFtf ||
+                           pipeline.method == PipelineMethod::kPipeline;
+    if (args.has("device") && !has_j_ftf)
+      std::cerr << "jpcr_run: warning: --device has no effect: method "
+                << to_string(pipeline.method)
+                << " runs on the CPU (only J-ftf has a CUDA kernel; the keyframes' Quad IT maps "
+                   "are fitted on the CPU)\n";
 #ifdef JPCR_HAVE_DDS
     if (!args.get_flag("dds") && (args.has("domain") || args.has("cyclone-uri")))
       throw cli::UsageError("--domain and --cyclone-uri need --dds");
