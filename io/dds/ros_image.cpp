@@ -2,14 +2,17 @@
 
 #include <algorithm>
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
 #include <list>
 #include <mutex>
+#include <optional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <unordered_map>
 #include <utility>
 
@@ -107,9 +110,48 @@ StampMemory& stamp_memory() {
 
 }  // namespace
 
+// The shortest decimal that reads back as `seconds` (std::to_chars), rounded to nanoseconds,
+// as sec + nanosec; none for a value out of a stamp's range. A dataset's stamp in decimal
+// (TUM's microseconds: 1305031102.160407) comes back as written, where the nearest nanosecond
+// to the double was 1305031102.160407066.
+namespace {
+
+std::optional<RosStamp> shortest_decimal_stamp(double seconds) {
+  constexpr long long kPerSecond = 1000000000;
+  if (!(std::abs(seconds) < 2147483647.0)) return std::nullopt;
+  char text[64];
+  const std::to_chars_result r =
+      std::to_chars(text, text + sizeof text, seconds, std::chars_format::fixed);
+  if (r.ec != std::errc()) return std::nullopt;
+  const std::string_view digits(text, static_cast<std::size_t>(r.ptr - text));
+  const bool negative = !digits.empty() && digits[0] == '-';
+  long long whole = 0, nanosec = 0;
+  std::size_t i = negative ? 1 : 0;
+  for (; i < digits.size() && digits[i] != '.'; ++i)
+    whole = 10 * whole + (digits[i] - '0');
+  int place = 0;
+  for (++i; i < digits.size() && place < 9; ++i, ++place)
+    nanosec = 10 * nanosec + (digits[i] - '0');
+  for (; place < 9; ++place)
+    nanosec *= 10;
+  if (i < digits.size() && digits[i] >= '5') ++nanosec;  // the tenth digit rounds
+  long long total = whole * kPerSecond + nanosec;
+  if (negative) total = -total;
+  long long sec = total / kPerSecond;
+  long long rest = total % kPerSecond;
+  if (rest < 0) {
+    --sec;
+    rest += kPerSecond;
+  }
+  return RosStamp{static_cast<std::int32_t>(sec), static_cast<std::uint32_t>(rest)};
+}
+
+}  // namespace
+
 RosStamp to_ros_stamp(double seconds) {
   RosStamp remembered;
   if (stamp_memory().recall(seconds, remembered)) return remembered;
+  if (const std::optional<RosStamp> decimal = shortest_decimal_stamp(seconds)) return *decimal;
   const double whole = std::floor(seconds);
   long long nanosec = std::llround((seconds - whole) * kNanosecondsPerSecond);
   long long sec = static_cast<long long>(whole);

@@ -48,6 +48,26 @@ TEST(RosStamp, RoundTripsToTheNanosecond) {
   EXPECT_EQ(to_ros_stamp(1.5).nanosec, 500000000u);
 }
 
+// A stamp that came as decimal text (a TUM list's microseconds) is published as written: the
+// shortest decimal that reads back as the double, not the nearest nanosecond to the double
+// (1305031102.160407066 for 1305031102.160407: exact-time matching against the recording
+// missed it).
+TEST(RosStamp, ADecimalStampIsPublishedAsWritten) {
+  const auto expect = [](double seconds, std::int32_t sec, std::uint32_t nanosec) {
+    const RosStamp s = to_ros_stamp(seconds);
+    EXPECT_EQ(s.sec, sec) << seconds;
+    EXPECT_EQ(s.nanosec, nanosec) << seconds;
+  };
+  expect(1305031102.160407, 1305031102, 160407000u);
+  expect(1305031102.194330, 1305031102, 194330000u);
+  expect(1733400000.5, 1733400000, 500000000u);
+  expect(-0.466667, -1, 533333000u);
+  expect(2.0000000004, 2, 0u);  // rounded at the ninth digit ...
+  expect(2.0000000006, 2, 1u);  // ... both ways
+  expect(0.9999999996, 1, 0u);  // into the next second
+  expect(1e-12, 0, 0u);
+}
+
 // sec + nanosec·1e-9 in decimal: a negative sec with nanosec > 0 is above sec.
 TEST(RosStamp, IsFormattedAsItsValue) {
   EXPECT_EQ(format_ros_stamp(12, 500), "12.000000500");

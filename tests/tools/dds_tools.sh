@@ -25,10 +25,26 @@ wait $echo_depth || { echo "FAIL: echo of depth exited $?"; cat "$tmp/depth.txt"
 wait $echo_info || { echo "FAIL: echo of camera_info exited $?"; cat "$tmp/info.txt"; fail=1; }
 n=$(grep -c "^image stamp=1305031102\.[0-9]* frame=camera_depth_optical_frame 640x480 16UC1 step=1280 bytes=614400 valid=" "$tmp/depth.txt")
 [ "$n" = 5 ] || { echo "FAIL: $n of 5 depth lines"; cat "$tmp/depth.txt"; fail=1; }
-grep -q "stamp=1305031102.262886" "$tmp/depth.txt" || { echo "FAIL: frame 3 stamp"; cat "$tmp/depth.txt"; fail=1; }
+# The stamp as the dataset writes it (the nearest nanosecond to its double was 1305031102.262885...).
+grep -q "stamp=1305031102.262886000 " "$tmp/depth.txt" || { echo "FAIL: frame 3 stamp"; cat "$tmp/depth.txt"; fail=1; }
 n=$(grep -c "^camera_info .* 640x480 fx=517.300 fy=516.500 cx=318.600 cy=255.300 model=plumb_bob$" "$tmp/info.txt")
 [ "$n" = 5 ] || { echo "FAIL: $n of 5 camera_info lines"; cat "$tmp/info.txt"; fail=1; }
 echo "ok: 5 depth images and 5 camera_infos received from jpcr_dds_play"
+
+# A best-effort publisher (a ROS sensor-data camera) sends the reliable echo nothing: it says so,
+# with the way out (it printed only "received 0 of 1").
+printf 'dds:\n  input_reliability: best_effort\n' > "$tmp/best_effort.yaml"
+"$echo_bin" rt/camera/depth/image_raw --domain $domain --count 1 --timeout 8 > "$tmp/mismatch.txt" 2>&1 &
+echo_mismatch=$!
+# (about 5 s of frames: the echo meets the publisher while it plays; it matches no subscriber)
+"$play" --params "$tmp/best_effort.yaml" --dataset "$tum" --config "$cam" --frames 0:8 --rate 0.05 \
+  --domain $domain --wait-subscribers 0 > "$tmp/best_effort_play.txt" 2>&1
+wait $echo_mismatch; rc=$?
+if [ "$rc" = 1 ] && grep -q "offer a QoS this reader cannot match (reliability: a best-effort publisher needs --best-effort)" "$tmp/mismatch.txt"; then
+  echo "ok: a QoS mismatch is named: $(grep QoS "$tmp/mismatch.txt")"
+else
+  echo "FAIL: QoS mismatch: exit $rc"; cat "$tmp/mismatch.txt" "$tmp/best_effort_play.txt"; fail=1
+fi
 
 # At the recorded rate, SIGINT stops the player between frames with exit 0.
 "$play" --dataset "$tum" --config "$cam" --rate 0.05 --domain $domain --wait-subscribers 0 \

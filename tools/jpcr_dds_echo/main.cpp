@@ -5,7 +5,10 @@
 #include <chrono>
 #include <cstring>
 #include <iostream>
+#include <string>
 #include <type_traits>
+
+#include <dds/dds.h>
 
 #include "cli/arguments.hpp"
 #include "cli/dds_options.hpp"
@@ -65,7 +68,14 @@ int echo(const DdsParticipant& participant, const EchoOptions& o) {
       ++received;
       std::cout << summarize(m) << std::endl;
       if constexpr (std::is_same_v<Msg, RosPath>) {
-        if (o.tum) std::cout << format_trajectory(trajectory_of(m)) << std::flush;
+        if (o.tum) {
+          try {  // another publisher's path may hold a pose that is none: said, not fatal
+            std::cout << format_trajectory(trajectory_of(m)) << std::flush;
+          } catch (const InputError& e) {
+            std::cerr << "jpcr_dds_echo: path sample " << received << ": " << e.what()
+                      << "; its poses are not printed\n";
+          }
+        }
       }
     });
   }
@@ -73,6 +83,17 @@ int echo(const DdsParticipant& participant, const EchoOptions& o) {
     if (errno == EPIPE) return 0;  // the reader of the output has what it wanted
     std::cerr << "jpcr_dds_echo: error: cannot write the output: " << std::strerror(errno) << '\n';
     return 1;
+  }
+  // A publisher this reader cannot match sends nothing, silently: say so (the node does too).
+  dds_requested_incompatible_qos_status_t qos{};
+  if (dds_get_requested_incompatible_qos_status(reader.handle(), &qos) == DDS_RETCODE_OK &&
+      qos.total_count > 0) {
+    std::cerr << "jpcr_dds_echo: " << qos.total_count << " publisher(s) on " << o.topic
+              << " offer a QoS this reader cannot match ("
+              << (qos.last_policy_id == DDS_RELIABILITY_QOS_POLICY_ID
+                      ? "reliability: a best-effort publisher needs --best-effort"
+                      : "QoS policy " + std::to_string(qos.last_policy_id))
+              << "); their samples do not arrive\n";
   }
   if (o.count > 0 && received < o.count && !cli::stop_requested()) {
     std::cerr << "jpcr_dds_echo: received " << received << " of " << o.count << " samples on "

@@ -62,14 +62,26 @@ int run_all(const NodeOptions& o, const DdsParticipant& participant) {
   const node::Outcome outcome = node::receive(
       o.stop, [&](auto slice) { return subscriber.wait_frame(slice); },
       [&](const Frame& frame) {
+        // A frame the pipeline refuses (another camera's) leaves the order as it was.
+        const node::StampOrder before = order;
         order.take(frame.timestamp);
         publisher.set_camera_frame_id(subscriber.frame_id());
-        const PipelineFrame& f = runner->add(frame);
+        const PipelineFrame* added = nullptr;
+        try {
+          added = &runner->add(frame);
+        } catch (...) {
+          order = before;
+          throw;
+        }
+        const PipelineFrame& f = *added;
         publisher.frame_added(*runner, f);
         progress.frame(f, runner->keyframe_count(), subscriber);
         return node::Step::kProcessed;
       });
   progress.done();
+  // The input's counts as the loop ended: frames that arrive during the flush below are not
+  // dropped ones (the subscriber keeps taking them).
+  const std::string inputs = node::input_summary(subscriber);
   std::cerr << "jpcr_node: " << node::rate_summary(outcome, "frames") << '\n';
   if (outcome.processed > 0) {
     runner->finish();
@@ -79,9 +91,8 @@ int run_all(const NodeOptions& o, const DdsParticipant& participant) {
     std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
   std::cout << "processed " << outcome.processed << " frames, " << runner->keyframe_count()
             << " keyframes, " << publisher.keyframes_published() << " curvature maps ("
-            << publisher.writes_failed() << " samples not published); "
-            << node::input_summary(subscriber) << ", skipped " << outcome.skipped
-            << " frames; stopped by " << outcome.reason << '\n';
+            << publisher.writes_failed() << " samples not published); " << inputs << ", skipped "
+            << outcome.skipped << " frames; stopped by " << outcome.reason << '\n';
   return 0;
 }
 
@@ -135,11 +146,18 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
   const node::Outcome outcome = node::receive(
       stop, [&](auto slice) { return subscriber.wait_frame(slice); },
       [&](const Frame& frame) {
+        const node::StampOrder before = order;  // as in run_all
         order.take(frame.timestamp);
         results.set_camera_frame_id(subscriber.frame_id());
         keyframes.set_camera_frame_id(subscriber.frame_id());
         bool keyframe = false;
-        const PipelineFrame f = front_end.track(frame, &keyframe);
+        PipelineFrame f;
+        try {
+          f = front_end.track(frame, &keyframe);
+        } catch (...) {
+          order = before;
+          throw;
+        }
         results.publish_odometry(
             f.front_end,
             position_rotation_covariance(f.pose_covariance, f.front_end.pose.translation()));
@@ -170,14 +188,17 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
         return node::Step::kProcessed;
       });
   progress.done();
+  // The input's counts as the loop ended: frames that arrive during the flush below are not
+  // dropped ones (the subscriber keeps taking them).
+  const std::string inputs = node::input_summary(subscriber);
   std::cerr << "jpcr_node: " << node::rate_summary(outcome, "frames") << '\n';
   if (back_end_went_away()) {
     if (!results.flush(o.flush_timeout))
       std::cerr << "jpcr_node: not every reader acknowledged the last samples\n";
     std::cout << "processed " << outcome.processed << " frames, sent " << sent
-              << " keyframes, not the end of stream (" << back_end_gone << "); "
-              << node::input_summary(subscriber) << ", skipped " << outcome.skipped
-              << " frames; stopped by " << outcome.reason << '\n';
+              << " keyframes, not the end of stream (" << back_end_gone << "); " << inputs
+              << ", skipped " << outcome.skipped << " frames; stopped by " << outcome.reason
+              << '\n';
     return 1;
   }
   // The end of stream, and the back end's acknowledgement of every keyframe, wait as a keyframe
@@ -212,8 +233,8 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
   std::cout << "processed " << outcome.processed << " frames, sent " << sent
             << (ended ? " keyframes and the end of stream; "
                       : " keyframes, not the end of stream; ")
-            << node::input_summary(subscriber) << ", skipped " << outcome.skipped
-            << " frames; stopped by " << outcome.reason << '\n';
+            << inputs << ", skipped " << outcome.skipped << " frames; stopped by " << outcome.reason
+            << '\n';
   return back_end_gone.empty() ? 0 : 1;  // gone while it ended: said above
 }
 
