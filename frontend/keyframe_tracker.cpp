@@ -57,7 +57,7 @@ KeyframeTracker::KeyframeTracker(const FrontendParams& params,
 
 const Keyframe& KeyframeTracker::keyframe() const {
   if (!has_keyframe())
-    throw std::logic_error("KeyframeTracker: no keyframe before the first frame");
+    throw std::logic_error("KeyframeTracker: no keyframe before the first frame with points");
   return keyframe_;
 }
 

@@ -39,7 +39,7 @@ struct TrackResult {
   /// (initial_pose). Frames before it (a sensor starting blank) have no reference: they keep
   /// the gauge's pose as an unknown motion (kept_last_motion, 1 m and 1 rad per axis).
   bool is_gauge = false;
-  /// Covariance of T_wc as the chain of alignments from the first frame (the gauge: zero)
+  /// Covariance of T_wc as the chain of alignments from the gauge (zero)
   /// gives it: ξ of a left update exp(ξ^) T_wc in world axes, (v, ω) as IcpResult::covariance.
   /// Σ = Σ_ref + Ad(T_w,ref) Σ_icp Ad(T_w,ref)ᵀ (first-order, independent alignments); a frame
   /// that kept the last motion adds the last good alignment's Σ_icp at the previous frame (1 m
@@ -65,7 +65,7 @@ class KeyframeTracker {
   TrackResult track(const Frame& frame);
 
   bool has_keyframe() const { return keyframe_.pyramid != nullptr; }
-  /// The current keyframe; throws std::logic_error before the first frame.
+  /// The current keyframe; throws std::logic_error before the first frame with points.
   const Keyframe& keyframe() const;
   const std::vector<int>& keyframe_indices() const { return keyframe_indices_; }
   const FrontendParams& params() const { return params_; }

@@ -85,6 +85,13 @@ int sync_to_disk(const std::string& path) {
 
 }  // namespace
 
+long owner_pid(const std::string& name, const std::string& prefix) {
+  if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) return 0;
+  const std::string digits = name.substr(prefix.size());
+  if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return 0;
+  return std::stol(digits);
+}
+
 void sync_directory(const std::string& dir) {
   sync_to_disk(dir.empty() ? std::string(".") : dir);
 }

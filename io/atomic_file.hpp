@@ -33,6 +33,10 @@ std::string output_file_target(const std::string& path);
 /// program can see its live PIDs as gone.
 bool process_is_gone(long pid);
 
+/// The PID `name` ends with after `prefix` ("traj.txt.partial-" and "1234"), or 0 when the rest
+/// is not 1 to 9 digits: how a run names the copies and staging directories it owns.
+long owner_pid(const std::string& name, const std::string& prefix);
+
 /// Flushes a directory's entries (renames into it) to the disk; best effort, errors ignored.
 void sync_directory(const std::string& dir);
 

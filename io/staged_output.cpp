@@ -31,12 +31,8 @@ void remove_abandoned_staging(const fs::path& parent, const std::string& prefix,
                               const fs::path& target) {
   std::error_code ec;
   for (const fs::directory_entry& e : fs::directory_iterator(parent, ec)) {
-    const std::string name = e.path().filename().string();
-    if (name.size() <= prefix.size() || name.compare(0, prefix.size(), prefix) != 0) continue;
-    const std::string digits = name.substr(prefix.size());
-    if (digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
-    const long pid = std::stol(digits);
-    if (!process_is_gone(pid)) continue;
+    const long pid = owner_pid(e.path().filename().string(), prefix);
+    if (pid == 0 || !process_is_gone(pid)) continue;
     std::error_code ignored;
     for (const fs::directory_entry& aside : fs::directory_iterator(e.path() / kPrevious, ignored))
       if (!fs::exists(fs::symlink_status(target / aside.path().filename(), ignored)))
@@ -53,13 +49,14 @@ StagedOutput::StagedOutput(std::string target, std::vector<std::string> layout)
   std::error_code ec;
   if (fs::exists(target_, ec) && !fs::is_directory(target_, ec))
     throw InputError(target_ + ": output path exists and is not a directory");
-  // A link that leads nowhere, or in a loop, would be refused only at commit(), after the run.
-  if (fs::is_symlink(fs::symlink_status(target_, ec)) && !fs::is_directory(target_, ec))
+  fs::path t = fs::path(target_).lexically_normal();
+  if (t.filename().empty()) t = t.parent_path();  // "out/" → "out"
+  // A link that leads nowhere, or in a loop, would be refused only at commit(), after the run
+  // (tested without a trailing '/', through which lstat follows the link).
+  if (fs::is_symlink(fs::symlink_status(t, ec)) && !fs::is_directory(t, ec))
     throw InputError(target_ + ": a symbolic link to no directory (" +
                      (ec ? ec.message() : std::string("it leads nowhere")) +
                      "): give the path of a directory, or of none");
-  fs::path t = fs::path(target_).lexically_normal();
-  if (t.filename().empty()) t = t.parent_path();  // "out/" → "out"
   fs::path parent = t.has_parent_path() ? t.parent_path() : fs::path(".");
   for (fs::path missing = parent; !missing.empty() && !fs::exists(missing, ec);
        missing = missing.parent_path())

@@ -31,7 +31,9 @@ struct RosStamp {
 /// 240 ns, so the stamps that to_seconds converted are remembered (the kRememberedStamps most
 /// recently used, process-wide, thread-safe) and come back exactly: what jpcr publishes for a
 /// received frame carries that frame's header stamp to the nanosecond, as ROS's exact-time
-/// synchronisation and tf lookups need. Any other value is rounded to the nearest nanosecond.
+/// synchronisation and tf lookups need. Any other value gives the shortest decimal that reads
+/// back as it, rounded at the nanosecond: a dataset's decimal stamp as written (1305031102.160407
+/// is 160407000 ns, where the double's nearest nanosecond is 160407066).
 RosStamp to_ros_stamp(double seconds);
 /// sec + nanosec in seconds; remembered for to_ros_stamp.
 double to_seconds(const RosStamp& stamp);

@@ -253,6 +253,10 @@ TEST(StagedOutput, BadTargetsAreInputErrorsNamingThem) {
               StagedOutput out(loop, {});
             }).rfind(loop + ": a symbolic link to no directory (", 0),
             0u);
+  EXPECT_EQ(test::input_error_of([&] {
+              StagedOutput out(nowhere + "/", {});  // lstat of "nowhere/" follows the link
+            }).rfind(nowhere + "/: a symbolic link to no directory (", 0),
+            0u);
   const std::string to_dir = dir.file("to_dir");
   std::filesystem::create_directory(dir.file("real"));
   std::filesystem::create_symlink(dir.file("real"), to_dir);

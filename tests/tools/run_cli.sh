@@ -63,6 +63,28 @@ assert [x["dataset_index"] for x in f] == [0, 1, 2, 3], f
 assert all(k["map"] + ".npy" in __import__("os").listdir(t + "/strict/curvature")
            for k in r["keyframe_records"]), r["keyframe_records"]
 PY
+# A sensor that starts blank: frame 0's depth all zero (a 16-bit PNG of zeros). The first frame
+# with points is the gauge; frame 0 keeps its pose, untrusted, and frames 1-3 are refined and
+# trusted (jpcr_run crashed on it: it read the last keyframe before there was one).
+cp -r "$tmp/seq" "$tmp/blank"
+/usr/bin/python3 - "$tmp/blank/depth/$(ls "$tmp/blank/depth" | head -1)" 160 120 <<'PY' || fail=1
+import struct, sys, zlib
+path, w, h = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+def chunk(kind, data):
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+raw = b"".join(b"\0" * (1 + 2 * w) for _ in range(h))
+open(path, "wb").write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 16, 0, 0, 0, 0))
+                       + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+PY
+for method in j-ftf pipeline; do
+  expect 0 "$method " -- "$run" --dataset "$tmp/blank" --method $method --out "$tmp/blank_$method"
+  got=$(grep -v '^#' "$tmp/blank_$method/verdicts.txt" | awk '{print $2 "/" $NF}' | tr '\n' ' ')
+  [ "$got" = "too_few_points/no ok/yes ok/yes ok/yes " ] \
+    || { echo "FAIL: $method on a blank start: verdicts $got"; fail=1; }
+done
+[ "$(grep -v '^#' "$tmp/blank_j-ftf/keyframes.txt" | wc -l)" = 3 ] \
+  || { echo "FAIL: j-ftf on a blank start: keyframes"; cat "$tmp/blank_j-ftf/keyframes.txt"; fail=1; }
+
 # Options that change nothing for the method are said (they were taken silently).
 expect 0 "warning: --window has no effect: method icp-ftf refines no windows" -- "$run" \
   --dataset "$tmp/seq" --method icp-ftf --window 7 --out "$tmp/icp"

@@ -4,8 +4,8 @@
 //   odom             after every frame: the frame's current refined pose (trajectory().back())
 //                    with the front end's pose covariance accumulated along its alignments
 //                    (PipelineFrame::pose_covariance in ROS's x, y, z, rx, ry, rz order; zero
-//                    for the first frame, the gauge); not in the split deployment, where the
-//                    front-end process publishes its own poses
+//                    for the gauge, 1 m / 1 rad per axis before it); not in the split deployment,
+//                    where the front-end process publishes its own poses
 //   keyframe_pose,   when a keyframe's curvature map is final (the pipeline's CurvatureSink):
 //   curvature,       its refined pose, κ1/κ2 map (32FC2) and render_curvature (rgb8)
 //   curvature_color

@@ -287,6 +287,9 @@ int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
           PipelineFrame f;
           f.index = static_cast<int>(first + i);
           f.front_end = k.tracked[i];
+          // Frames before the first keyframe had no points to be aligned against (the message
+          // carries no verdicts; the others' alignments are taken as ok).
+          if (back_end->keyframe_count() == 0) f.icp_verdict = IcpVerdict::too_few_points;
           back_end->add(f, nullptr);
         }
         if (k.end_of_stream) return node::Step::kEndOfStream;

@@ -42,9 +42,6 @@ struct Run {
   std::vector<int> keyframes;
 };
 
-// Makes the missing parent directories of `files` and returns them, deepest first, for a run
-// that fails later to remove; when one cannot be made, removes those it made before throwing,
-// so a failed run leaves no empty directory behind.
 // What a run killed outright (SIGKILL) left beside `file` (below): FILE.partial-PID, its new
 // file never moved in, and FILE.previous-PID, the earlier file's second name or the earlier file
 // moved aside, of a PID that is gone. A previous copy goes back when FILE is missing (killed
@@ -58,12 +55,8 @@ void clean_up_after_killed_runs(const std::string& file) {
   for (; !ec && it != fs::directory_iterator(); it.increment(ec)) {
     const std::string entry = it->path().filename().string();
     for (const std::string tag : {".partial-", ".previous-"}) {
-      if (entry.rfind(name + tag, 0) != 0) continue;
-      const std::string pid = entry.substr(name.size() + tag.size());
-      if (pid.empty() || pid.size() > 9 ||
-          pid.find_first_not_of("0123456789") != std::string::npos ||
-          !process_is_gone(std::stol(pid)))
-        continue;
+      const long pid = owner_pid(entry, name + tag);
+      if (pid == 0 || !process_is_gone(pid)) continue;
       std::error_code ignored;
       if (tag == ".previous-" && !fs::exists(fs::symlink_status(target, ignored)))
         fs::rename(it->path(), target, ignored);
@@ -73,6 +66,9 @@ void clean_up_after_killed_runs(const std::string& file) {
   }
 }
 
+// Makes the missing parent directories of `files` and returns them, deepest first, for a run
+// that fails later to remove; when one cannot be made, removes those it made before throwing,
+// so a failed run leaves no empty directory behind.
 std::vector<std::filesystem::path> make_parents(const std::vector<std::string>& files) {
   namespace fs = std::filesystem;
   std::vector<fs::path> made;

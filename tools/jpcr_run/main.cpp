@@ -180,24 +180,33 @@ int run_main(int argc, char** argv) {
 #ifdef JPCR_HAVE_DDS
       if (dds) dds->frame_added(runner, f);
 #endif
-      const PipelineKeyframe& k = runner.keyframes().back();  // the first frame is one
-      for (const std::optional<RefinementReport>* r : {&k.pair, &k.window})
-        if (k.frame == f.index && *r && (*r)->verdict == RefinementVerdict::kError)
-          progress.note("frame " + std::to_string(i) + ": " + (*r)->method + " failed (" +
-                        (*r)->error + "); the front end's motion is kept");
+      // None before the first frame with points (a sensor that starts blank).
+      if (!runner.keyframes().empty()) {
+        const PipelineKeyframe& k = runner.keyframes().back();
+        for (const std::optional<RefinementReport>* r : {&k.pair, &k.window})
+          if (k.frame == f.index && *r && (*r)->verdict == RefinementVerdict::kError)
+            progress.note("frame " + std::to_string(i) + ": " + (*r)->method + " failed (" +
+                          (*r)->error + "); the front end's motion is kept");
+      }
       std::ostringstream extra;
       extra << "keyframes " << runner.keyframes().size() << "  icp " << to_string(f.icp_verdict)
             << (f.kept_last_motion ? " (kept last motion)" : "");
       progress(i - range.first + 1, range.last - range.first, extra.str());
     }
     // finish() refines the last, partial window: its failure is said as the loop's are.
-    const bool window_before = runner.keyframes().back().window.has_value();
+    const bool no_keyframe = runner.keyframes().empty();  // no frame had points
+    const bool window_before = !no_keyframe && runner.keyframes().back().window.has_value();
     if (!pairs_only) progress.note("finishing: the last, partial window (if any) is refined");
     runner.finish();
-    if (const PipelineKeyframe& k = runner.keyframes().back();
-        !window_before && k.window && k.window->verdict == RefinementVerdict::kError)
+    if (no_keyframe) {
+      progress.note(
+          "no frame had the points to be aligned against: every pose is the first's, "
+          "untrusted");
+    } else if (const PipelineKeyframe& k = runner.keyframes().back();
+               !window_before && k.window && k.window->verdict == RefinementVerdict::kError) {
       progress.note("frame " + std::to_string(k.frame) + ": " + k.window->method + " failed (" +
                     k.window->error + ") on the last window; its poses are not applied");
+    }
     cli::throw_if_stopped("the end of the run" + unchanged);
 #ifdef JPCR_HAVE_DDS
     if (dds) {
