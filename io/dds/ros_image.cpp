@@ -108,14 +108,10 @@ StampMemory& stamp_memory() {
   return memory;
 }
 
-}  // namespace
-
 // The shortest decimal that reads back as `seconds` (std::to_chars), rounded to nanoseconds,
 // as sec + nanosec; none for a value out of a stamp's range. A dataset's stamp in decimal
 // (TUM's microseconds: 1305031102.160407) comes back as written, where the nearest nanosecond
 // to the double was 1305031102.160407066.
-namespace {
-
 std::optional<RosStamp> shortest_decimal_stamp(double seconds) {
   constexpr long long kPerSecond = 1000000000;
   if (!(std::abs(seconds) < 2147483647.0)) return std::nullopt;
