@@ -9,6 +9,7 @@
 #include "cli/arguments.hpp"
 #include "cli/dataset_run_checks.hpp"
 #include "cli/device_option.hpp"
+#include "cli/heartbeat.hpp"
 #include "cli/pipeline_options.hpp"
 #include "cli/progress.hpp"
 #include "cli/stop_signal.hpp"
@@ -31,6 +32,9 @@
 namespace jpcr {
 
 namespace {
+
+// How often a frame that is still being refined says so (cli::Heartbeat).
+constexpr std::chrono::seconds kHeartbeat{10};
 
 // A write into OUT that failed (a full disk): passed on as it is, not blamed on the dataset.
 struct OutputError : InputError {
@@ -166,9 +170,12 @@ int run_main(int argc, char** argv) {
     self = &runner;
     const std::string unchanged = "; " + out.target() + " is left as it was";
     cli::Progress progress("jpcr_run");
+    // A frame that completes a J-full window takes tens of seconds at 640x480 on the CPU.
+    const auto say = [&progress](const std::string& line) { progress.note(line); };
     for (std::size_t i = range.first; i < range.last; ++i) {
       cli::throw_if_stopped("frame " + std::to_string(i) + unchanged);
       const PipelineFrame& f = [&]() -> const PipelineFrame& {
+        const cli::Heartbeat heartbeat("frame " + std::to_string(i), kHeartbeat, say);
         try {
           return runner.add(dataset->load(i));
         } catch (const OutputError&) {  // the output's fault, not the dataset's
@@ -197,7 +204,10 @@ int run_main(int argc, char** argv) {
     const bool no_keyframe = runner.keyframes().empty();  // no frame had points
     const bool window_before = !no_keyframe && runner.keyframes().back().window.has_value();
     if (!pairs_only) progress.note("finishing: the last, partial window (if any) is refined");
-    runner.finish();
+    {
+      const cli::Heartbeat heartbeat("finishing", kHeartbeat, say);
+      runner.finish();
+    }
     if (no_keyframe) {
       progress.note(
           "no frame had the points to be aligned against: every pose is the first's, "
