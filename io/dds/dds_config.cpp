@@ -69,6 +69,10 @@ void DdsConfig::validate() const {
   // Each kept image may be max_image_megabytes large.
   if (image_history_depth < 1 || image_history_depth > 1000)
     throw InputError("image_history_depth: must be in 1..1000");
+  if (input_keep_all && !input_reliable)
+    throw InputError(
+        "input_history: keep_all needs input_reliability: reliable (a best-effort camera cannot "
+        "be made to wait)");
   if (keyframe_queue < 1 || keyframe_queue > 1000)
     throw InputError("keyframe_queue: must be in 1..1000");
   if (!(max_image_megabytes > 0.0) || max_image_megabytes > 4096.0 || max_image_bytes() < 1024) {
@@ -76,6 +80,15 @@ void DdsConfig::validate() const {
   }
   if (max_image_side < 1 || max_image_side > 16384)
     throw InputError("max_image_side: must be in 1..16384 (a camera's largest side)");
+}
+
+DdsQos DdsConfig::depth_qos() const {
+  DdsQos qos{input_reliable, false, image_history_depth};
+  if (input_keep_all) {  // the resource limit is what makes a reliable KEEP_ALL writer wait
+    qos.keep_all = true;
+    qos.max_samples = image_history_depth;
+  }
+  return qos;
 }
 
 std::size_t DdsConfig::max_image_bytes() const {
@@ -96,6 +109,9 @@ void read_dds_config(YamlSection yaml, DdsConfig& config) {
   std::string reliability = config.input_reliable ? "reliable" : "best_effort";
   yaml.read_choice("input_reliability", reliability, {"reliable", "best_effort"});
   config.input_reliable = reliability == "reliable";
+  std::string history = config.input_keep_all ? "keep_all" : "keep_last";
+  yaml.read_choice("input_history", history, {"keep_last", "keep_all"});
+  config.input_keep_all = history == "keep_all";
   yaml.read("max_image_megabytes", config.max_image_megabytes);
   yaml.read("max_image_side", config.max_image_side);
   yaml.finish();

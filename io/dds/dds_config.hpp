@@ -37,6 +37,11 @@ struct DdsConfig {
   int image_history_depth = 2;  // samples, KEEP_LAST depth of image topics (MB each)
   int keyframe_queue = 32;      // keyframes a split back end holds unread (MB each)
   bool input_reliable = true;   // depth input QoS: reliable (ROS default) or best effort
+  // Depth input history KEEP_ALL (input_history: keep_all), lossless: the reader holds at most
+  // image_history_depth images and takes the next only when the caller asks for a frame, so a
+  // reliable KEEP_ALL camera (jpcr_dds_play with the same setting) waits for a slow node instead
+  // of frames being dropped. A KEEP_LAST publisher is not held back: its frames still drop.
+  bool input_keep_all = false;
   // MiB, larger claimed images are rejected unread. Cyclone reassembles a sample before jpcr
   // sees it: its MaxSampleSize bounds that memory (65 MiB in configs/cyclonedds_loopback.xml;
   // Cyclone's default is about 2 GiB, so a network configuration should set it too).
@@ -49,8 +54,9 @@ struct DdsConfig {
   /// max_image_megabytes in bytes.
   std::size_t max_image_bytes() const;
 
-  /// QoS of the depth input and its camera_info (input_reliable, volatile).
-  DdsQos depth_qos() const { return DdsQos{input_reliable, false, image_history_depth}; }
+  /// QoS of the depth input (input_reliable, volatile, input_keep_all) and its camera_info
+  /// (input_reliable, volatile, KEEP_LAST history_depth).
+  DdsQos depth_qos() const;
   DdsQos camera_info_qos() const { return DdsQos{input_reliable, false, history_depth}; }
 };
 

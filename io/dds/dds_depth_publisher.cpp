@@ -20,11 +20,18 @@ DdsDepthPublisher::DdsDepthPublisher(const DdsParticipant& participant, const Dd
 
 DdsDepthPublisher::~DdsDepthPublisher() = default;
 
-void DdsDepthPublisher::publish(const Frame& frame) {
+bool DdsDepthPublisher::publish(const Frame& frame, const std::function<bool()>& keep_waiting) {
   const RosCameraInfo info = encode_camera_info(frame.camera);
   writers_->camera_info.write(camera_info_message(info, frame.timestamp, config_.camera_frame_id));
   const RosImageBuffer depth = encode_depth_image(frame.depth, encoding_);
-  writers_->depth.write(image_message(depth, frame.timestamp, config_.camera_frame_id));
+  const auto message = image_message(depth, frame.timestamp, config_.camera_frame_id);
+  if (!config_.input_keep_all) {
+    writers_->depth.write(message);
+    return true;
+  }
+  while (!writers_->depth.try_write(message))  // each try waits up to max_blocking_ms
+    if (keep_waiting && !keep_waiting()) return false;
+  return true;
 }
 
 int DdsDepthPublisher::matched() const {

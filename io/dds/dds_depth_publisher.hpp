@@ -22,7 +22,12 @@ class DdsDepthPublisher {
   DdsDepthPublisher(const DdsDepthPublisher&) = delete;
   DdsDepthPublisher& operator=(const DdsDepthPublisher&) = delete;
 
-  void publish(const Frame& frame);
+  /// Publishes the frame's camera_info and depth image. With DdsConfig::input_keep_all the depth
+  /// writer is reliable KEEP_ALL: while a KEEP_ALL reader's queue (jpcr_node with the same
+  /// setting) is full, this waits, asking keep_waiting (when given) between tries of
+  /// DdsQos::max_blocking_ms, and returns false, the image unwritten, once it says no. Otherwise
+  /// it never waits and returns true. Throws DdsError when Cyclone refuses a sample.
+  bool publish(const Frame& frame, const std::function<bool()>& keep_waiting = {});
   /// Subscribers matched on the depth topic.
   int matched() const;
   /// Waits until reliable subscribers acknowledged every frame (call before exiting).

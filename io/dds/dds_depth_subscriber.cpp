@@ -49,6 +49,7 @@ struct Listener {
 struct DdsDepthSubscriber::State {
   State(const DdsParticipant& p, const DdsConfig& c)
       : queue_depth(static_cast<std::size_t>(c.image_history_depth)),
+        keep_all(c.input_keep_all),
         limits(limits_of(c)),
         camera_listener(this, on_camera_info, on_camera_incompatible),
         depth_listener(this, on_depth, on_depth_incompatible),
@@ -62,43 +63,76 @@ struct DdsDepthSubscriber::State {
     return l;
   }
 
-  // Cyclone's receive thread: take at once, so that the reader's history never overflows.
+  // Cyclone's receive thread: take at once, so that the reader's history never overflows; with
+  // KEEP_ALL the images stay in it (its resource limit holds the camera back) until the caller
+  // has room for them (take_waiting_depth).
   static void on_depth(dds_entity_t reader, void* arg) {
     State& s = *static_cast<State*>(arg);
     try {
-      take_depth(reader, s);
+      if (s.keep_all) {
+        const std::lock_guard<std::mutex> lock(s.mutex);
+        s.depth_pending = true;
+        s.arrived.notify_all();
+      } else {
+        take_depth(reader, s);
+      }
     } catch (...) {  // bad_alloc in the queue, a failed lock: nothing may leave Cyclone's thread
       s.lost_in_listener.fetch_add(1);
     }
   }
 
-  static void take_depth(dds_entity_t reader, State& s) {
-    take_samples<RosImage>(reader, [&](const RosImage& m) {
-      ReceivedImage r;
-      const RosImageView view = image_view_of(m);
-      r.stamp = stamp_of(m.header);
-      try {
-        if (m.header.frame_id != nullptr) r.frame_id = m.header.frame_id;
-      } catch (const std::exception&) {  // bad_alloc: nothing may leave Cyclone's thread
-      }
-      try {
-        check_image_layout(view, {{"16UC1", 2}, {"32FC1", 4}}, s.limits);
-        r.image.height = view.height;
-        r.image.width = view.width;
-        r.image.encoding = std::string(view.encoding);
-        r.image.step = view.step;
-        r.image.data.assign(view.data, view.data + view.size);
-      } catch (const std::exception& e) {  // also bad_alloc: nothing may leave Cyclone's thread
-        r.problem = e.what();
-      }
-      const std::lock_guard<std::mutex> lock(s.mutex);
-      s.images.push_back(std::move(r));
-      if (s.images.size() > s.queue_depth) {  // KEEP_LAST: the oldest goes, counted
-        s.images.pop_front();
-        ++s.dropped;
-      }
-      s.arrived.notify_all();
-    });
+  // A received depth image, checked, onto the queue (KEEP_LAST: the oldest goes, counted).
+  static void queue_image(const RosImage& m, State& s) {
+    ReceivedImage r;
+    const RosImageView view = image_view_of(m);
+    r.stamp = stamp_of(m.header);
+    try {
+      if (m.header.frame_id != nullptr) r.frame_id = m.header.frame_id;
+    } catch (const std::exception&) {  // bad_alloc: nothing may leave Cyclone's thread
+    }
+    try {
+      check_image_layout(view, {{"16UC1", 2}, {"32FC1", 4}}, s.limits);
+      r.image.height = view.height;
+      r.image.width = view.width;
+      r.image.encoding = std::string(view.encoding);
+      r.image.step = view.step;
+      r.image.data.assign(view.data, view.data + view.size);
+    } catch (const std::exception& e) {  // also bad_alloc: nothing may leave Cyclone's thread
+      r.problem = e.what();
+    }
+    const std::lock_guard<std::mutex> lock(s.mutex);
+    s.images.push_back(std::move(r));
+    if (s.images.size() > s.queue_depth) {
+      s.images.pop_front();
+      ++s.dropped;
+    }
+    s.arrived.notify_all();
+  }
+
+  // Takes the oldest `max` images (all by default) onto the queue; returns how many it took.
+  static std::size_t take_depth(dds_entity_t reader, State& s,
+                                std::size_t max = static_cast<std::size_t>(-1)) {
+    std::size_t taken = 0;
+    take_samples<RosImage>(
+        reader, [&](const RosImage& m) { queue_image(m, s); }, max, &taken);
+    return taken;
+  }
+
+  // KEEP_ALL: the caller's thread takes as many waiting images as the queue has room for, once
+  // there is a camera_info to decode them with (until then they wait in the reader).
+  void take_waiting_depth(std::size_t decoded) {
+    if (!keep_all || !camera) return;
+    std::size_t room = 0;
+    {
+      const std::lock_guard<std::mutex> lock(mutex);
+      if (decoded + images.size() >= queue_depth) return;
+      room = queue_depth - decoded - images.size();
+      depth_pending = false;  // before the take: an image arriving during it sets it again
+    }
+    if (take_depth(depth.handle(), *this, room) == room) {
+      const std::lock_guard<std::mutex> lock(mutex);
+      depth_pending = true;  // there may be more
+    }
   }
 
   static void on_camera_info(dds_entity_t reader, void* arg) {
@@ -150,11 +184,13 @@ struct DdsDepthSubscriber::State {
   }
 
   const std::size_t queue_depth;
+  const bool keep_all;  // DdsConfig::input_keep_all
   const RosImageLimits limits;
   std::atomic<int> depth_incompatible{kNoPolicy}, camera_incompatible{kNoPolicy};
   static constexpr int kNoPolicy = -1;
-  std::mutex mutex;  // guards images, cameras, dropped
+  std::mutex mutex;  // guards images, cameras, dropped, depth_pending
   std::condition_variable arrived;
+  bool depth_pending = false;  // KEEP_ALL: images may wait in the reader
   std::deque<ReceivedImage> images;
   std::deque<ReceivedCamera> cameras;
   static constexpr std::size_t kCameraQueue = 8;
@@ -276,6 +312,7 @@ void DdsDepthSubscriber::process() {
       reject(config_.camera_info_topic, c.problem);
     }
   }
+  s.take_waiting_depth(s.frames.size());
   std::deque<ReceivedImage> images;
   std::size_t dropped = 0;
   {
@@ -371,7 +408,7 @@ std::optional<Frame> DdsDepthSubscriber::wait_frame(std::chrono::milliseconds ti
     if (!s.cameras.empty() || s.dropped != dropped_seen_) return true;
     if (s.depth_incompatible != State::kNoPolicy || s.camera_incompatible != State::kNoPolicy)
       return true;
-    if (s.camera) return !s.images.empty();
+    if (s.camera) return !s.images.empty() || s.depth_pending;
     return std::any_of(s.images.begin(), s.images.end(),
                        [](const ReceivedImage& r) { return !r.problem.empty(); });
   };

@@ -8,7 +8,11 @@
 // queue of at most image_history_depth images, the KEEP_LAST depth of the input QoS, and decoded
 // frames wait for the caller under the same bound: when the caller is slower than the camera,
 // the oldest waiting image is dropped, counted (frames_dropped()) and logged, never lost silently
-// in the reader's history nor kept to pile up behind the caller.
+// in the reader's history nor kept to pile up behind the caller. With DdsConfig::input_keep_all
+// the reader is KEEP_ALL with a resource limit of image_history_depth images, and images are taken
+// from it only as the caller makes room: nothing is dropped, and a reliable KEEP_ALL camera waits
+// (Cyclone holds its writes back while the reader is full); a KEEP_LAST camera is not held back,
+// and Cyclone drops what the reader has no room for (counted as lost in transport, if it says).
 //
 // The depth is used as received: it must be rectified (a driver's image_rect topic; what
 // jpcr_dds_play publishes is), and its intrinsics are the camera_info's P, the rectified

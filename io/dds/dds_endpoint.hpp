@@ -3,8 +3,10 @@
 // Topics are keyless and written as XCDR1, which is what ROS 2 (rmw_cyclonedds) expects.
 #pragma once
 
+#include <algorithm>
 #include <chrono>
 #include <cstddef>
+#include <cstdint>
 #include <functional>
 #include <string>
 #include <utility>
@@ -88,18 +90,26 @@ class DdsWriter : public DdsEndpoint {
   bool try_write(const Msg& sample) const { return try_write_sample(&sample); }
 };
 
-/// Takes every available sample of `reader` and calls on_sample(const Msg&) on each valid one;
-/// the sample is a loan valid only during the call. Returns the number of valid samples. For
+/// Takes every available sample of `reader`, or the oldest `max`, and calls
+/// on_sample(const Msg&) on each valid one; the sample is a loan valid only during the call.
+/// Returns the number of samples taken, valid or not (`taken`, when given) and of valid ones. For
 /// DdsReader::take and for listener callbacks, which get the reader's handle.
 template <typename Msg, typename OnSample>
-std::size_t take_samples(dds_entity_t reader, OnSample&& on_sample) {
+std::size_t take_samples(dds_entity_t reader, OnSample&& on_sample,
+                         std::size_t max = static_cast<std::size_t>(-1),
+                         std::size_t* taken = nullptr) {
   constexpr std::size_t kBatch = 8;  // samples per loan
   std::size_t valid = 0;
+  if (taken) *taken = 0;
   for (;;) {
+    const std::size_t batch = std::min(kBatch, max);
+    if (batch == 0) return valid;
     void* samples[kBatch] = {};
     dds_sample_info_t infos[kBatch];
-    const dds_return_t n = dds_take(reader, samples, infos, kBatch, kBatch);
+    const dds_return_t n = dds_take(reader, samples, infos, batch, static_cast<uint32_t>(batch));
     if (n <= 0) return valid;
+    max -= static_cast<std::size_t>(n);
+    if (taken) *taken += static_cast<std::size_t>(n);
     struct Loan {
       dds_entity_t reader;
       void** samples;
@@ -111,7 +121,7 @@ std::size_t take_samples(dds_entity_t reader, OnSample&& on_sample) {
       ++valid;
       on_sample(*static_cast<const Msg*>(samples[i]));
     }
-    if (static_cast<std::size_t>(n) < kBatch) return valid;
+    if (static_cast<std::size_t>(n) < batch) return valid;
   }
 }
 

@@ -358,5 +358,56 @@ TEST_F(DdsDepth, FramesWaitingForASlowCallerStayWithinTheQueue) {
   EXPECT_DOUBLE_EQ(left.back(), 2.0 * kRounds) << "the oldest go, the newest stays";
 }
 
+// dds.input_history: keep_all on both sides: a camera publishing as fast as it can to a caller
+// that takes a frame every 30 ms waits for it, and every frame arrives, in order, none dropped.
+TEST_F(DdsDepth, AKeepAllCameraWaitsForASlowCallerAndNothingIsDropped) {
+  config_.input_keep_all = true;
+  ASSERT_EQ(config_.image_history_depth, 2);
+  std::ostringstream log;
+  DdsDepthSubscriber subscriber(node_side_, config_, &log);
+  DdsDepthPublisher publisher(camera_side_, config_, DepthEncoding::kMetres32);
+  ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
+  constexpr int kFrames = 12;
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  int written = 0;
+  std::thread camera([&] {
+    for (int i = 0; i < kFrames; ++i) {
+      if (!publisher.publish(test_frame(1.0 + i),
+                             [&] { return std::chrono::steady_clock::now() < give_up; }))
+        return;
+      ++written;
+    }
+  });
+  std::vector<double> stamps;
+  while (stamps.size() < std::size_t{kFrames} && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(milliseconds(30));  // the node at work
+    if (const std::optional<Frame> f = subscriber.wait_frame(milliseconds(500)))
+      stamps.push_back(f->timestamp);
+  }
+  camera.join();
+  EXPECT_EQ(written, kFrames);
+  std::vector<double> expected;
+  for (int i = 0; i < kFrames; ++i)
+    expected.push_back(1.0 + i);
+  EXPECT_EQ(stamps, expected);
+  EXPECT_EQ(subscriber.frames_dropped(), 0u) << log.str();
+  EXPECT_EQ(subscriber.frames_received(), std::size_t{kFrames});
+  EXPECT_EQ(log.str().find("dropped"), std::string::npos) << log.str();
+}
+
+// The same camera to a caller that keeps the default (keep last): it is not held back, and the
+// frames the caller has no room for are dropped and counted, as before.
+TEST_F(DdsDepth, AKeepAllCameraIsNotHeldBackByAKeepLastCaller) {
+  DdsConfig camera_config = config_;
+  camera_config.input_keep_all = true;
+  std::ostringstream log;
+  DdsDepthSubscriber subscriber(node_side_, config_, &log);
+  DdsDepthPublisher publisher(camera_side_, camera_config, DepthEncoding::kMetres32);
+  ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
+  publish_acknowledged(publisher, 1.0, 7);
+  EXPECT_EQ(drain(subscriber), (std::vector<double>{6.0, 7.0}));
+  EXPECT_EQ(subscriber.frames_dropped(), 5u);
+}
+
 }  // namespace
 }  // namespace jpcr

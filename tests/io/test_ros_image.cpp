@@ -387,6 +387,28 @@ TEST(DepthEncoding, ParsesTheTwoRosDepthEncodings) {
             "unknown depth encoding 'mono8' (expected 16UC1 or 32FC1)");
 }
 
+// input_history: keep_all makes the depth input a bounded KEEP_ALL queue (the resource limit is
+// what holds a reliable KEEP_ALL camera back); a best-effort camera cannot be held back.
+TEST(DdsConfig, KeepAllInputHistoryIsABoundedReliableQueue) {
+  const DdsQos last = parse_params("", "e.yaml").dds.depth_qos();
+  EXPECT_FALSE(last.keep_all);
+  EXPECT_EQ(last.depth, 2);
+  const DdsQos all =
+      parse_params("dds:\n  input_history: keep_all\n  image_history_depth: 5\n", "p.yaml")
+          .dds.depth_qos();
+  EXPECT_TRUE(all.keep_all);
+  EXPECT_TRUE(all.reliable);
+  EXPECT_EQ(all.max_samples, 5);
+  EXPECT_EQ(input_error_of([] {
+              parse_params("dds:\n  input_reliability: best_effort\n  input_history: keep_all\n",
+                           "p.yaml");
+            }),
+            "p.yaml:3: key 'dds.input_history': keep_all needs input_reliability: reliable (a "
+            "best-effort camera cannot be made to wait)");
+  EXPECT_NE(input_error_of([] { parse_params("dds:\n  input_history: keep_some\n", "p.yaml"); }),
+            "<no error>");
+}
+
 TEST(DdsConfig, YamlSectionMapsOntoTheStruct) {
   const Params p = parse_params(
       "dds:\n  domain_id: 7\n  topic_prefix: rt/robot/\n  depth_topic: rt/d\n"

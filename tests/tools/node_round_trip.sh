@@ -4,7 +4,8 @@
 # depth images from jpcr_test_bad_depth; jpcr_node --method j-ftf rejects those with one log line
 # each, processes the 6 good frames and publishes odom, curvature and path; the final path
 # received by jpcr_dds_echo equals jpcr_run's offline trajectory to 1e-9 m. jpcr_run --dds
-# publishes the same path. --idle-timeout and SIGTERM stop the node cleanly; bad command lines
+# publishes the same path. With dds.input_history: keep_all on both sides the player waits for
+# the node and nothing is dropped. --idle-timeout and SIGTERM stop the node cleanly; bad command lines
 # exit 2 and bad parameters 1. Every wait is bounded.
 set -uo pipefail
 build=$1 src=$2
@@ -67,6 +68,24 @@ n=$(grep -c "^image .* 160x120 32FC2 .* valid=" "$tmp/curv.txt")
 n=$(grep -c "^image .* 160x120 rgb8 .* ok$" "$tmp/color.txt")
 [ "$n" = 6 ] || { echo "FAIL: $n of 6 curvature colour maps"; cat "$tmp/color.txt"; fail=1; }
 same_path "$tmp/path.txt" "$tmp/off/trajectory.txt" || { echo "FAIL: node path vs offline"; cat "$tmp/path.txt"; fail=1; }
+
+# dds.input_history: keep_all on both sides, at the default input depth of 2 (the first round
+# trip needs 16): the player waits for the J-ftf node, slower than it, and every frame is
+# processed, none dropped, with the same path as offline.
+printf 'dds:\n  history_depth: 32\n  input_history: keep_all\n' > "$tmp/keep_all.yaml"
+keep_all=(--params "$tmp/keep_all.yaml" --domain $domain)
+"$echo_bin" rt/jpcr/path "${keep_all[@]}" --tum --timeout 240 > "$tmp/keep_all_path.txt" 2>&1 &
+keep_all_echo=$!; pids+=($keep_all_echo)
+sleep 1
+"$node" "${keep_all[@]}" --method j-ftf --max-frames 6 --idle-timeout 60 > "$tmp/keep_all.txt" 2>&1 &
+keep_all_pid=$!; pids+=($keep_all_pid)
+expect 0 "published 6 frames" -- "$play" --dataset "$tmp/seq" --encoding 32FC1 \
+  --as-fast-as-possible --wait-subscribers 15 "${keep_all[@]}"
+expect_node $keep_all_pid 200 "$tmp/keep_all.txt" "processed 6 frames, 6 keyframes.*dropped 0 frames" \
+  "keep_all input: the player waits for the node"
+kill -INT $keep_all_echo; wait_bounded $keep_all_echo 10
+same_path "$tmp/keep_all_path.txt" "$tmp/off/trajectory.txt" ||
+  { echo "FAIL: keep_all: node path vs offline"; cat "$tmp/keep_all_path.txt"; fail=1; }
 
 # --idle-timeout after the first frame, and SIGTERM before any, both stop with exit 0. The same
 # two frames played again are out of time order: skipped, one line each.

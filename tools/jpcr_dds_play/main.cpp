@@ -1,11 +1,8 @@
 // jpcr_dds_play: publishes a dataset (TUM directory, synthetic sequence, MRPT rawlog) the way a
 // ROS 2 depth camera does: sensor_msgs/CameraInfo + sensor_msgs/Image (16UC1 mm or 32FC1 m) on
 // the dds: section's depth_topic and camera_info_topic, at the recorded rate or faster.
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <iostream>
 #include <thread>
 
@@ -24,17 +21,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-// A progress line: rewritten in place on a terminal, every 10 % otherwise.
-void progress(std::size_t done, std::size_t total, Clock::time_point start) {
-  static const bool terminal = isatty(2) != 0;
-  const bool tenth = done * 10 / total != (done - 1) * 10 / total;
-  if (!terminal && !tenth && done != total) return;
-  const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
-  std::fprintf(stderr, "%sjpcr_dds_play: frame %zu/%zu  %.1f s  %.1f frames/s%s",
-               terminal ? "\r" : "", done, total, seconds, done / std::max(seconds, 1e-9),
-               terminal && done != total ? "" : "\n");
-}
-
 int run(int argc, char** argv) {
   cli::Arguments args(
       "jpcr_dds_play",
@@ -42,7 +28,11 @@ int run(int argc, char** argv) {
       "sensor_msgs/CameraInfo and a sensor_msgs/Image (16UC1 in mm or 32FC1 in m) per\n"
       "frame, stamped with the frame's timestamp, on the topics of the dds: section\n"
       "(default rt/camera/depth/image_raw and rt/camera/depth/camera_info).\n"
-      "The Cyclone configuration comes from dds.cyclone_uri or $CYCLONEDDS_URI.");
+      "The Cyclone configuration comes from dds.cyclone_uri or $CYCLONEDDS_URI.\n"
+      "With dds: {input_history: keep_all} in --params (and in jpcr_node's), the image\n"
+      "writer is reliable KEEP_ALL and waits while the node's queue is full: every frame\n"
+      "is processed, at the node's pace. Otherwise frames a slow node cannot take are\n"
+      "dropped (counted by the node).");
   args.required("dataset", "TUM RGB-D directory, jpcr_synth output or MRPT .rawlog")
       .option("config", "camera YAML (default: the dataset's own camera)")
       .option("encoding", "depth encoding: 16UC1 (mm) | 32FC1 (m)", "16UC1")
@@ -103,6 +93,7 @@ int run(int argc, char** argv) {
     }
 
     const Clock::time_point start = Clock::now();
+    cli::Progress progress("jpcr_dds_play", start);
     const double t0 = source->timestamp(first);
     std::size_t published = 0;
     for (std::size_t i = first; i < last && !cli::stop_requested(); ++i) {
@@ -115,9 +106,10 @@ int run(int argc, char** argv) {
               std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(50)));
         if (cli::stop_requested()) break;
       }
-      publisher.publish(frame);
+      // dds.input_history: keep_all: waits while the subscriber's queue is full.
+      if (!publisher.publish(frame, [] { return !cli::stop_requested(); })) break;
       ++published;
-      progress(published, last - first, start);
+      progress(published, last - first);
     }
     const double seconds = std::chrono::duration<double>(Clock::now() - start).count();
     constexpr std::chrono::milliseconds kFlushTimeout{2000};  // for the last frames to be acked
