@@ -67,7 +67,7 @@ DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& p, 
     for (int v = begin; v < end; ++v) {
       for (int u = 0; u < w; ++u) {
         const float z = depth(u, v);
-        if (z <= 0.0f) continue;
+        if (!(z > 0.0f) || !std::isfinite(z)) continue;  // no measurement (NaN, Inf, <= 0)
         float sum = 0.0f, weight = 0.0f;
         for (int dv = std::max(-r, -v); dv <= std::min(r, h - 1 - v); ++dv) {
           const float* row = &depth(0, v + dv);
@@ -75,7 +75,7 @@ DepthImage bilateral_filter(const DepthImage& depth, const PreprocessParams& p, 
           for (int du = std::max(-r, -u); du <= std::min(r, w - 1 - u); ++du) {
             const float zi = row[u + du];
             const float d = std::abs(zi - z);
-            if (zi <= 0.0f || d >= cutoff) continue;
+            if (!(zi > 0.0f) || !(d < cutoff)) continue;  // also NaN (an index of INT_MIN)
             // d < cutoff, yet d · to_bin can round up to kTable in float.
             const float wi = ws[du] * range[std::min(static_cast<int>(d * to_bin), kTable - 1)];
             sum += wi * zi;
@@ -182,7 +182,13 @@ NormalMap compute_normal_map(const VertexMap& vertices, int offset, float max_ju
 NormalLookup normals_for(const FramePyramid& pyramid, int level) {
   const bool own = !pyramid.levels.at(level).normals.empty() ||
                    level + 1 >= static_cast<int>(pyramid.levels.size());
-  return {own ? &pyramid.levels[level].normals : &pyramid.levels[level + 1].normals, own ? 0 : 1};
+  const PyramidLevel& serving = pyramid.levels[own ? level : level + 1];
+  // A pyramid assembled by hand (not by preprocess) may have no normals, or a map of another size.
+  if (serving.normals.empty() || serving.normals.width() != serving.vertices.width() ||
+      serving.normals.height() != serving.vertices.height())
+    throw InputError("pyramid level " + std::to_string(level) +
+                     ": no normal map of its own or of the next level's size");
+  return {&serving.normals, own ? 0 : 1};
 }
 
 FramePyramid preprocess(const Frame& frame, const PreprocessParams& params, RowPool* pool) {

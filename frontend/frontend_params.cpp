@@ -75,6 +75,10 @@ void FrontendParams::validate() const {
   require(threads >= 0 && threads <= 256, "threads", "must be in 0..256 (0: one per core)");
   preprocess.validate();
   icp.validate();
+  // The pairs' weights z^-k are bounded by min_depth^-k: at 1 mm a patch outweighed a room 1e12
+  // to 1 and turned a good alignment degenerate.
+  require(icp.depth_weight_exponent == 0 || preprocess.min_depth >= 0.01f, "min_depth",
+          "must be at least 0.01 m while icp.depth_weight_exponent weighs pairs by z^-k");
   tracker.validate();
 }
 

@@ -52,6 +52,9 @@ KeyframeTracker::KeyframeTracker(const FrontendParams& params,
                                  const Eigen::Isometry3d& initial_pose)
     : params_(params), initial_pose_(initial_pose) {
   params_.validate();
+  // Checked here: every later alignment starts from it, and refuses a guess that is not rigid.
+  if (!is_rigid(initial_pose_))
+    throw InputError("initial_pose: must be a rigid motion (finite, R orthonormal, det R = 1)");
   pool_ = std::make_unique<RowPool>(params_.threads);
 }
 

@@ -56,7 +56,8 @@ struct TrackResult {
 class KeyframeTracker {
  public:
   /// `initial_pose` is the camera-to-world pose of the first frame with points, keyframe 0 (the
-  /// gauge, method.md §1); usually frame 0.
+  /// gauge, method.md §1); usually frame 0. Throws InputError when FrontendParams::validate
+  /// refuses `params` or `initial_pose` is no rigid motion (is_rigid).
   explicit KeyframeTracker(const FrontendParams& params = {},
                            const Eigen::Isometry3d& initial_pose = Eigen::Isometry3d::Identity());
 

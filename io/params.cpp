@@ -132,6 +132,7 @@ void read_frontend(YamlSection yaml, FrontendParams& p) {
   read_icp(yaml.section("icp"), p.icp);
   read_tracker(yaml.section("tracker"), p.tracker);
   yaml.finish();
+  validate_in(yaml.section("preprocess"), p);  // across sections: min_depth and the z^-k weights
 }
 
 void read_quadric(YamlSection yaml, QuadricParams& p) {

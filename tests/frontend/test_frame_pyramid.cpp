@@ -113,6 +113,22 @@ TEST(FramePyramid, BilateralFilterKeepsStepsAndHolesAndSmoothsNoise) {
   EXPECT_GT(f(3, 12), 1.0f);
 }
 
+// bilateral_filter is public: NaN and Inf are "no measurement" there too (a NaN neighbour
+// indexed the range table at INT_MIN).
+TEST(FramePyramid, BilateralFilterTakesNanAndInfAsNoMeasurement) {
+  PreprocessParams p;
+  DepthImage d(8, 8, 1.0f);
+  d(3, 3) = std::numeric_limits<float>::quiet_NaN();
+  d(5, 2) = std::numeric_limits<float>::infinity();
+  d(1, 6) = -std::numeric_limits<float>::infinity();
+  const DepthImage f = bilateral_filter(d, p);
+  for (int v = 0; v < 8; ++v)
+    for (int u = 0; u < 8; ++u) {
+      const bool measured = std::isfinite(d(u, v)) && d(u, v) > 0.0f;
+      EXPECT_EQ(f(u, v), measured ? 1.0f : 0.0f) << u << "," << v;
+    }
+}
+
 // filtered_noise_inflation against sampling: white depth noise through the filter (range weights
 // made flat by a huge σ_depth, so the spatial kernel alone), summed over every `stride`-th pixel;
 // the variance of the sum over draws, divided by what independent pixels of the same variance

@@ -79,6 +79,15 @@ TEST(FrontendParams, MistakesNameTheFileLineAndKey) {
             std::string::npos);
   EXPECT_NE(error_of("frontend:\n  tracker:\n    mode: sideways\n").find("frame_to_keyframe"),
             std::string::npos);
+  // z^-k weights need a floor: a patch at 1 mm outweighed a room 1e12 to 1.
+  EXPECT_NE(error_of("frontend:\n  preprocess:\n    min_depth: 0.001\n")
+                .find("'frontend.preprocess.min_depth': must be at least 0.01 m while "
+                      "icp.depth_weight_exponent weighs pairs by z^-k"),
+            std::string::npos);
+  FrontendParams unweighted;
+  unweighted.preprocess.min_depth = 0.0f;
+  unweighted.icp.depth_weight_exponent = 0;
+  EXPECT_NO_THROW(unweighted.validate());
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 // keyframe policy, and a failed frame that keeps the last good motion and says so.
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -343,6 +344,18 @@ TEST(KeyframeTracker, InvalidParamsAreRejected) {
   FrontendParams params;
   params.icp.iterations = {0, 0, 0};
   EXPECT_THROW(KeyframeTracker{params}, InputError);
+}
+
+// An initial pose that is no rigid motion (an unnormalised quaternion's R, scaled by 1 + 1e-5) is
+// refused at once: it was taken, and every frame after the first then threw.
+TEST(KeyframeTracker, AnInitialPoseThatIsNoRigidMotionIsRefused) {
+  Eigen::Isometry3d scaled = Eigen::Isometry3d::Identity();
+  scaled.linear() *= 1.0 + 1e-5;
+  EXPECT_EQ(test::input_error_of([&] { KeyframeTracker tracker({}, scaled); }),
+            "initial_pose: must be a rigid motion (finite, R orthonormal, det R = 1)");
+  Eigen::Isometry3d nan = Eigen::Isometry3d::Identity();
+  nan.translation().x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(KeyframeTracker({}, nan), InputError);
 }
 
 }  // namespace
