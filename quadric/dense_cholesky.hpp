@@ -37,6 +37,25 @@ JPCR_HD bool cholesky_factor(Eigen::Matrix<Scalar, N, N>& H, Scalar eps_rel = Sc
   return true;
 }
 
+/// Whether the positive semi-definite H (lower triangle read) is numerically regular: every
+/// pivot of its unit-diagonal form D^-½ H D^-½ (D = diag H; a correlation matrix, whose pivots
+/// lie in (0, 1] and are at least its smallest eigenvalue) exceeds `floor`. Invariant to the
+/// columns' scales, and it sees two columns equal up to scale, which a floor relative to the
+/// largest diagonal misses and a Levenberg-Marquardt damping λ diag H would make solvable.
+template <typename Scalar, int N>
+JPCR_HD bool unit_diagonal_regular(const Eigen::Matrix<Scalar, N, N>& H, Scalar floor) {
+  Scalar inverse_sqrt[N];
+  for (int i = 0; i < N; ++i) {
+    if (!(H(i, i) > Scalar(0))) return false;  // also NaN
+    inverse_sqrt[i] = Scalar(1) / std::sqrt(H(i, i));
+  }
+  Eigen::Matrix<Scalar, N, N> C;
+  for (int i = 0; i < N; ++i)
+    for (int j = 0; j <= i; ++j)
+      C(i, j) = H(i, j) * inverse_sqrt[i] * inverse_sqrt[j];
+  return cholesky_factor<Scalar, N>(C, floor);  // its floor is relative to the diagonal, 1 here
+}
+
 /// Solves L Lᵀ x = b with a factor from cholesky_factor, in place in b.
 template <typename Scalar, int N>
 JPCR_HD void cholesky_solve(const Eigen::Matrix<Scalar, N, N>& L, Eigen::Matrix<Scalar, N, 1>& b) {

@@ -40,17 +40,27 @@ JPCR_SIMD_CLONES void lane_steps(const PixelLaneSums& s, const double damping[kP
     }
     const float* y = s.products[tri(kGammaColumn[i], kColR)];
 #pragma omp simd
-    for (int l = 0; l < kLanes; ++l) {
-      H[i][i][l] *= 1.0 + damping[l];
+    for (int l = 0; l < kLanes; ++l)
       delta[i][l] = -S[i][l] * (kGammaSign[i] * y[l]);
-    }
   }
+  bool regular[kLanes];  // the undamped system's test, solve_damped_step's (kSingularPivot)
+  for (int l = 0; l < kLanes; ++l) {
+    Eigen::Matrix<double, 6, 6> lane;
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j <= i; ++j)
+        lane(i, j) = H[i][j][l];
+    regular[l] = unit_diagonal_regular<double, 6>(lane, kSingularPivot);
+  }
+  for (int i = 0; i < 6; ++i)
+#pragma omp simd
+    for (int l = 0; l < kLanes; ++l)
+      H[i][i][l] *= 1.0 + damping[l];
 #pragma omp simd
   for (int l = 0; l < kLanes; ++l) {
     const double m01 = std::max(H[0][0][l], H[1][1][l]), m23 = std::max(H[2][2][l], H[3][3][l]);
     const double max_diag = std::max(std::max(m01, m23), std::max(H[4][4][l], H[5][5][l]));
     floor[l] = 1e-12 * max_diag;
-    good[l] = max_diag > 0.0;  // false for NaN too
+    good[l] = max_diag > 0.0 && regular[l];  // false for NaN too
   }
   for (int j = 0; j < 6; ++j) {
     for (int i = j; i < 6; ++i)  // column j: D_j (i = j), then D_j L_ij

@@ -153,11 +153,20 @@ JPCR_HD void range_unit_scales(double range, double S[6]) {
   S[3] = S[4] = S[5] = 1.0 / range;
 }
 
+/// The undamped system of a pixel is singular when a pivot of its unit-diagonal form falls below
+/// this (unit_diagonal_regular): the samples do not tell some combination of tilt, offset and
+/// curvature apart. Two pattern columns on a thin pole or a 2-px strip (x² is then affine in x)
+/// give 1e-16; every healthy pixel, silhouettes included, at least 2e-2 (review of 2026-12-06);
+/// float sums of the samples are good to about 1e-6. The damping used to hide such a system,
+/// and the pixel came back valid with a curvature the samples never saw (κ₂ = −0.5 1/m on a
+/// plane, −0.15 on a pole of −167).
+constexpr double kSingularPivot = 1e-4;
+
 /// Solves the damped system (H + λ diag H) Δ = −g in double (method.md §10: the step carries the
 /// minus sign the paper drops), as S H S + λ diag(S H S)) Δ' = −S g, Δ = S Δ' in the range units
 /// of range_unit_scales (the same step: the damping on the diagonal is invariant to column
-/// scales). Returns false when it is singular (cholesky_factor's floor, relative to the largest
-/// diagonal in range units: the same test at every scale of the scene) or not finite.
+/// scales). Returns false when the undamped system is singular (kSingularPivot), the damped one
+/// fails cholesky_factor's floor, or the step is not finite.
 template <typename Scalar>
 JPCR_HD bool solve_damped_step(const NormalEquations6<Scalar>& ne, double damping, double range,
                                Eigen::Matrix<double, 6, 1>& delta) {
@@ -167,9 +176,11 @@ JPCR_HD bool solve_damped_step(const NormalEquations6<Scalar>& ne, double dampin
   for (int i = 0; i < 6; ++i) {
     for (int j = 0; j <= i; ++j)
       H(i, j) = S[i] * double(ne.H(i, j)) * S[j];
-    H(i, i) *= 1.0 + damping;
     delta(i) = -S[i] * double(ne.g(i));
   }
+  if (!unit_diagonal_regular<double, 6>(H, kSingularPivot)) return false;
+  for (int i = 0; i < 6; ++i)
+    H(i, i) *= 1.0 + damping;
   if (!cholesky_factor<double, 6>(H)) return false;
   cholesky_solve<double, 6>(H, delta);
   for (int i = 0; i < 6; ++i) {

@@ -457,6 +457,33 @@ KernelAgreement compare_with_reference_kernel(const VertexMap& vertices,
   return a;
 }
 
+// Depth on two adjacent columns only (a thin pole, a cable): x takes two values, so x² is affine
+// in x and the samples cannot tell the curvature a from the tilt and offset. The undamped system
+// is singular, and both the lanes and the kernel say so; the damping used to make it solvable
+// and the pixels came back valid (κ₂ = −0.5 1/m on this plane, review of 2026-12-06).
+TEST(QuadricFit, ATwoColumnStripIsSingularInTheLanesAndTheKernel) {
+  const CameraIntrinsics camera = synthetic_camera(160, 120);
+  DepthImage depth(camera.width, camera.height, 0.0f);
+  for (int v = 0; v < camera.height; ++v)
+    depth(80, v) = depth(81, v) = 2.0f;
+  const VertexMap vertices = compute_vertex_map(depth, camera);
+  const NormalMap normals(camera.width, camera.height, Eigen::Vector3f(0.0f, 0.0f, -1.0f));
+  const QuadricFit fit;
+  const QuadricMap map = fit.estimate(vertices, normals);
+  const NeighbourhoodPattern pattern = fit.params().pattern.for_width(camera.width);
+  const VertexView view{vertices.data(), vertices.width(), vertices.height()};
+  for (int v = 30; v < 90; ++v)
+    for (int u : {80, 81}) {
+      EXPECT_EQ(map.status(u, v), QuadricStatus::kSingular) << u << "," << v;
+      Quadricd q;
+      EXPECT_EQ(fit_quadric_pixel<double>(view, pattern.offsets.data(), pattern.size(), u, v,
+                                          normals(u, v), fit.params().fit, q),
+                QuadricStatus::kSingular)
+          << u << "," << v;
+    }
+  EXPECT_EQ(map.valid_count(), 0u);
+}
+
 // 152 px wide: the last group of 16 pixels runs past the image. Measured with AVX-512 / AVX2
 // (SSE2): 15919 pixels, no status mismatch, p99 3.4e-6 (3.3e-6) 1/m, median 1.1e-7, 18 (24)
 // flipped, 0.11 % (0.15 %), RMS 3.3e-4 (3.7e-4) 1/m, nearly all from the flips. A slip in the

@@ -30,6 +30,25 @@ TEST(Se3, ExpLogRoundTripOverManyScales) {
   }
 }
 
+// Around the switch from series to closed forms, with a translation of a metre: exp(log T) = T
+// to rounding. The closed form of (1 − cos θ)/θ² lost 2e-8 relatively just above the old switch
+// at 1e-4, which made se3_log's d O(1) wrong there: 1.8e-8 m.
+TEST(Se3, ExpLogRoundTripIsExactAcrossTheSeriesSwitch) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> n(0.0, 1.0);
+  for (double angle : {0.99e-4, 1.0001e-4, 3e-4, 1e-3, 0.99e-2, 1.0001e-2, 3e-2}) {
+    for (int k = 0; k < 50; ++k) {
+      Vector6d xi;
+      xi.head<3>() = Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+      xi.tail<3>() = angle * Eigen::Vector3d(n(rng), n(rng), n(rng)).normalized();
+      const Eigen::Isometry3d T = se3_exp(xi);
+      EXPECT_LT((se3_exp(se3_log(T)).matrix() - T.matrix()).cwiseAbs().maxCoeff(), 1e-13)
+          << "angle " << angle;
+      EXPECT_LT((se3_log(T) - xi).norm(), 1e-12) << "angle " << angle;
+    }
+  }
+}
+
 TEST(Se3, LogExpRoundTripNearPi) {
   const Eigen::Vector3d axis = Eigen::Vector3d(1, 2, -0.5).normalized();
   for (double angle : {M_PI - 1e-3, M_PI - 1e-7, M_PI}) {
