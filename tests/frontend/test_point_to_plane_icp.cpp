@@ -6,6 +6,7 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+#include <Eigen/Eigenvalues>
 
 #include "jpcr/frontend/point_to_plane_icp.hpp"
 #include "jpcr/io/synthetic_noise.hpp"
@@ -302,6 +303,12 @@ TEST(PointToPlaneIcp, ASinglePlaneIsDegenerate) {
   EXPECT_GT(r.inlier_ratio, 0.9);
   // The unobserved directions keep the initial guess (the motion is 1 cm).
   EXPECT_LT(test::translation_error(r.pose, pair.truth), 0.012);
+  // and the covariance says they are unknown: variance 1 along each of the three (σ² H⁻¹ alone
+  // gave millimetres there, from the normals' noise), while what the plane observes stays
+  // known (noise-free: far below a millimetre or a milliradian).
+  const Vector6d variances = Eigen::SelfAdjointEigenSolver<Matrix6d>(r.covariance).eigenvalues();
+  EXPECT_GT(variances[3], 0.5) << variances.transpose();
+  EXPECT_LT(variances[2], 1e-6) << variances.transpose();
 }
 
 // Along a direction the geometry does not observe, the gradient is the normals' noise: here the
