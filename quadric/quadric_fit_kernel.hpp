@@ -156,11 +156,14 @@ JPCR_HD void range_unit_scales(double range, double S[6]) {
 /// The undamped system of a pixel is singular when a pivot of its unit-diagonal form falls below
 /// this (unit_diagonal_regular): the samples do not tell some combination of tilt, offset and
 /// curvature apart. Two pattern columns on a thin pole or a 2-px strip (x² is then affine in x)
-/// give 1e-16; every healthy pixel, silhouettes included, at least 2e-2 (review of 2026-12-06);
-/// float sums of the samples are good to about 1e-6. The damping used to hide such a system,
+/// give 1e-16 in double (review of 2026-12-06), and stay below this with the lanes' float sums
+/// (test ATwoColumnStripIsSingularInTheLanesAndTheKernel). The damping used to hide such a system,
 /// and the pixel came back valid with a curvature the samples never saw (κ₂ = −0.5 1/m on a
-/// plane, −0.15 on a pole of −167).
-constexpr double kSingularPivot = 1e-4;
+/// plane, −0.15 on a pole of −167). Measured on jpcr_synth --frames 3 --size 320x240 --seed 1
+/// (Quad IT, all pixels): 1e-6 takes 94 of 221 891 valid pixels noise-free in room_spheres (their
+/// RMS error 16.8 1/m; all pixels 2.136 → 2.122) and 58 in cylinders_boxes, 0–15 at 1 % range
+/// noise; 1e-4 took 777 and 466, half of them with errors below 0.05 1/m.
+constexpr double kSingularPivot = 1e-6;
 
 /// Solves the damped system (H + λ diag H) Δ = −g in double (method.md §10: the step carries the
 /// minus sign the paper drops), as S H S + λ diag(S H S)) Δ' = −S g, Δ = S Δ' in the range units
