@@ -317,19 +317,25 @@ std::vector<double> drain(DdsDepthSubscriber& subscriber) {
 }
 
 // A caller slower than the camera: of 7 frames sent before it asks, the queue (keep last 2)
-// keeps the newest 2; the other 5 are counted and logged, not lost silently in Cyclone.
+// keeps the newest 2; the other 5 are counted and logged, not lost silently in Cyclone. The same
+// with a KEEP_ALL camera (dds.input_history: keep_all on its side only): a keep-last caller does
+// not hold it back.
 TEST_F(DdsDepth, FramesTheCallerIsTooSlowForAreDroppedCountedAndLogged) {
   ASSERT_EQ(config_.image_history_depth, 2);
-  std::ostringstream log;
-  DdsDepthSubscriber subscriber(node_side_, config_, &log);
-  DdsDepthPublisher publisher(camera_side_, config_, DepthEncoding::kMetres32);
-  ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
-  publish_acknowledged(publisher, 1.0, 7);
-  EXPECT_EQ(drain(subscriber), (std::vector<double>{6.0, 7.0}));
-  EXPECT_EQ(subscriber.frames_dropped(), 5u);
-  EXPECT_EQ(subscriber.frames_received(), 2u);
-  EXPECT_NE(log.str().find("image_raw: dropped 5 frame(s), 5 in all"), std::string::npos)
-      << log.str();
+  for (const bool camera_keeps_all : {false, true}) {
+    DdsConfig camera_config = config_;
+    camera_config.input_keep_all = camera_keeps_all;
+    std::ostringstream log;
+    DdsDepthSubscriber subscriber(node_side_, config_, &log);
+    DdsDepthPublisher publisher(camera_side_, camera_config, DepthEncoding::kMetres32);
+    ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
+    publish_acknowledged(publisher, 1.0, 7);
+    EXPECT_EQ(drain(subscriber), (std::vector<double>{6.0, 7.0}));
+    EXPECT_EQ(subscriber.frames_dropped(), 5u);
+    EXPECT_EQ(subscriber.frames_received(), 2u);
+    EXPECT_NE(log.str().find("image_raw: dropped 5 frame(s), 5 in all"), std::string::npos)
+        << log.str();
+  }
 }
 
 // A caller that takes one frame for every two the camera sends: the frames waiting for it stay
@@ -393,20 +399,6 @@ TEST_F(DdsDepth, AKeepAllCameraWaitsForASlowCallerAndNothingIsDropped) {
   EXPECT_EQ(subscriber.frames_dropped(), 0u) << log.str();
   EXPECT_EQ(subscriber.frames_received(), std::size_t{kFrames});
   EXPECT_EQ(log.str().find("dropped"), std::string::npos) << log.str();
-}
-
-// The same camera to a caller that keeps the default (keep last): it is not held back, and the
-// frames the caller has no room for are dropped and counted, as before.
-TEST_F(DdsDepth, AKeepAllCameraIsNotHeldBackByAKeepLastCaller) {
-  DdsConfig camera_config = config_;
-  camera_config.input_keep_all = true;
-  std::ostringstream log;
-  DdsDepthSubscriber subscriber(node_side_, config_, &log);
-  DdsDepthPublisher publisher(camera_side_, camera_config, DepthEncoding::kMetres32);
-  ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
-  publish_acknowledged(publisher, 1.0, 7);
-  EXPECT_EQ(drain(subscriber), (std::vector<double>{6.0, 7.0}));
-  EXPECT_EQ(subscriber.frames_dropped(), 5u);
 }
 
 }  // namespace
