@@ -230,7 +230,8 @@ void PipelineBackEnd::forget_emitted() {
   keyframes_.erase(keyframes_.begin(),
                    keyframes_.begin() + static_cast<std::ptrdiff_t>(keyframes_gone));
   // Give back what a long stretch between keyframes took (128 frames held once kept 94 KB for the
-  // rest of the run): the vectors hold at most twice what is held, so live memory follows it.
+  // rest of the run): the vectors hold at most twice what is held (plus 16), so live memory
+  // follows it.
   if (frames_.capacity() > 2 * frames_.size() + 16) frames_.shrink_to_fit();
   if (keyframes_.capacity() > 2 * keyframes_.size() + 16) keyframes_.shrink_to_fit();
   first_frame_ += frames_gone;

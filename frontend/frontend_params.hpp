@@ -46,8 +46,9 @@ struct IcpParams {
   float max_normal_angle = 30.0f;  // deg, pairs whose normals disagree more are rejected
   RobustLoss robust_loss = RobustLoss::huber;
   float robust_scale = 0.01f;  // m, Huber's δ or Tukey's c on the point-to-plane residual
-  /// Pairs are also weighted by z^−k, z the target depth in m: the inverse variance of an axial
-  /// noise σ(z) ∝ z^(k/2). Structured-light sensors (Kinect: σ ≈ 0.0019 z² m) have k = 4; 0
+  /// Pairs are also weighted by z^−k, z the mean of the pair's two depths in m (the target's
+  /// alone biased the alignment along the view): the inverse variance of an axial noise
+  /// σ(z) ∝ z^(k/2). Structured-light sensors (Kinect: σ ≈ 0.0019 z² m) have k = 4; 0
   /// weighs all depths alike.
   int depth_weight_exponent = 4;
   float min_step_translation = 1e-5f;  // m, stop a level when the update is smaller ...

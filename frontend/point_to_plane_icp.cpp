@@ -172,16 +172,17 @@ void describe(const NormalEquations& eq, double max_normal_angle, IcpResult& r) 
   r.covariance =
       (eq.cost / dof) * eig.eigenvectors() * inv.asDiagonal() * eig.eigenvectors().transpose();
   // No pair at all (0 · ∞ above): nothing is known of the motion, 1 m and 1 rad per axis.
-  if (!r.covariance.allFinite()) {
-    r.covariance = Matrix6d::Identity();
-    return;
-  }
-  // Along the directions the geometry does not observe (a plane's in-plane motions) the step kept
-  // the guess (observable_step), and H's information there is the normals' noise: σ² H⁻¹
-  // predicted 1 mm where the error was 5-22 mm (review of 2026-12-06). They are unknown, as
-  // without pairs: variance 1 (m², rad², or the mix of a mixed direction) along each.
+  if (!r.covariance.allFinite()) r.covariance = Matrix6d::Identity();
+}
+
+// Along the directions the geometry does not observe (a plane's in-plane motions) the step kept
+// the guess (observable_step), and H's information there is the normals' noise: σ² H⁻¹
+// predicted 1 mm where the error was 5-22 mm (review of 2026-12-06). They are unknown, as
+// without pairs: variance 1 (m², rad², or the mix of a mixed direction) is added along each,
+// last (after the filter's inflation and the statistical convergence test, which see σ² H⁻¹).
+void add_unknown_directions(const NormalEquations& eq, double max_normal_angle, IcpResult& r) {
   const UnitFreeGeometry g = unit_free_geometry(eq, max_normal_angle);
-  if (!g.valid) return;
+  if (!g.valid || !r.covariance.allFinite()) return;
   const Eigen::SelfAdjointEigenSolver<Matrix6d> geometry(g.scaled);
   const int unobserved = unobserved_count(g, geometry.eigenvalues());
   for (int k = 0; k < unobserved; ++k) {
@@ -418,6 +419,7 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
       have_system = true;
       if (static_cast<double>(eq.inliers) < needed) {
         describe(eq, params.max_normal_angle, result);
+        add_unknown_directions(eq, params.max_normal_angle, result);
         result.pose = initial;
         result.verdict = IcpVerdict::too_few_points;
         return result;
@@ -426,6 +428,7 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
       ++result.iterations;
       if (!xi.allFinite()) {
         describe(eq, params.max_normal_angle, result);
+        add_unknown_directions(eq, params.max_normal_angle, result);
         result.verdict = IcpVerdict::diverged;
         return result;
       }
@@ -458,6 +461,7 @@ IcpResult align_point_to_plane(const FramePyramid& source, const FramePyramid& t
     // 90th percentile, while it was never below min_step (the level's cap came first).
     if (!result.converged && last.inliers > 0)
       result.converged = last_step.dot(result.covariance.ldlt().solve(last_step)) <= 1.0;
+    add_unknown_directions(last, params.max_normal_angle, result);
   }
   result.pose = T;
   const Eigen::Isometry3d motion = initial.inverse() * T;

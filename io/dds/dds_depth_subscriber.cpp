@@ -279,6 +279,31 @@ std::string DdsDepthSubscriber::other_camera(const std::string& frame_id) const 
          "' (a second camera on the topic, or a renamed one: restart to follow it)";
 }
 
+// KEEP_ALL: depth images that wait in the reader for a first camera_info hold Cyclone's receive
+// thread, and with it any camera_info sent later; said once, since the node then waits silently.
+void DdsDepthSubscriber::log_camera_info_wait() {
+  State& s = *state_;
+  bool waiting = false;
+  if (s.keep_all && !s.camera) {
+    const std::lock_guard<std::mutex> lock(s.mutex);
+    waiting = s.depth_pending;
+  }
+  if (!waiting) {
+    waiting_for_camera_info_.reset();
+    return;
+  }
+  const auto now = std::chrono::steady_clock::now();
+  if (!waiting_for_camera_info_) waiting_for_camera_info_ = now;
+  if (camera_info_wait_logged_ || now - *waiting_for_camera_info_ < kCameraInfoPatience) return;
+  camera_info_wait_logged_ = true;
+  *log_ << "jpcr dds: " << config_.depth_topic << ": depth images wait for a camera_info on "
+        << config_.camera_info_topic
+        << "; with dds.input_history: keep_all they hold back all input of this process, and a "
+           "camera_info sent from now on may not get through (publish it before the depth, or "
+           "use keep_last)"
+        << std::endl;
+}
+
 // Decodes what the listeners queued (camera_info first, as a camera driver publishes it first),
 // outside the lock so that Cyclone's receive thread never waits for a decode.
 void DdsDepthSubscriber::process() {
@@ -313,6 +338,7 @@ void DdsDepthSubscriber::process() {
     }
   }
   s.take_waiting_depth(s.frames.size());
+  log_camera_info_wait();
   std::deque<ReceivedImage> images;
   std::size_t dropped = 0;
   {

@@ -11,8 +11,10 @@
 // in the reader's history nor kept to pile up behind the caller. With DdsConfig::input_keep_all
 // the reader is KEEP_ALL with a resource limit of image_history_depth images, and images are taken
 // from it only as the caller makes room: nothing is dropped, and a reliable KEEP_ALL camera waits
-// (Cyclone holds its writes back while the reader is full); a KEEP_LAST camera is not held back,
-// and Cyclone drops what the reader has no room for (counted as lost in transport, if it says).
+// (Cyclone holds its writes back while the reader is full). Cyclone does so by retrying the full
+// reader on its receive thread, so nothing else reaches the process meanwhile: a camera_info that
+// comes only after the reader filled never arrives (said after 5 s), and a KEEP_LAST camera is
+// not held back, its frames lost uncounted (README).
 //
 // The depth is used as received: it must be rectified (a driver's image_rect topic; what
 // jpcr_dds_play publishes is), and its intrinsics are the camera_info's P, the rectified
@@ -78,6 +80,8 @@ class DdsDepthSubscriber {
   bool of_this_camera(const std::string& frame_id);
   std::string other_camera(const std::string& frame_id) const;
   void log_incompatible(const std::string& topic, std::atomic<int>& policy);
+  void log_camera_info_wait();
+  static constexpr std::chrono::seconds kCameraInfoPatience{5};
 
   DdsConfig config_;
   std::ostream* log_;
@@ -93,6 +97,10 @@ class DdsDepthSubscriber {
   bool distortion_logged_ = false;       // the note that D is not applied, once
   bool frame_mismatch_logged_ = false;   // the note that camera_info names another frame, once
   std::uint32_t lost_ = 0;
+  // KEEP_ALL: since when depth images wait in the reader for a first camera_info, and whether
+  // that was said (once, after kCameraInfoPatience).
+  std::optional<std::chrono::steady_clock::time_point> waiting_for_camera_info_;
+  bool camera_info_wait_logged_ = false;
 };
 
 }  // namespace jpcr

@@ -190,4 +190,8 @@ done
 
 expect 2 "--role must be all, frontend or backend, got 'middle'" -- "$node" --role middle
 expect 2 "--backend-wait must be 0..86400 s" -- "$node" --role frontend --backend-wait -1
+# A held-back (keep_all) input would block the acknowledgements the front end's keyframes wait for.
+printf 'dds:\n  input_history: keep_all\n' > "$tmp/keep_all.yaml"
+expect 1 "keep_all cannot pace a split front end" -- "$node" --role frontend \
+  --params "$tmp/keep_all.yaml" --domain $domain
 exit ${fail:-0}

@@ -43,9 +43,6 @@ TEST(CliHeartbeat, ALongStepSaysItIsStillWorking) {
   ASSERT_GE(lines.said.size(), 2u);
   EXPECT_EQ(lines.said[0].rfind("frame 35: still working (", 0), 0u) << lines.said[0];
   EXPECT_EQ(lines.said[0].back(), ')');
-  const std::size_t after_end = lines.count();
-  std::this_thread::sleep_for(milliseconds(100));  // five intervals: nothing after the end
-  EXPECT_EQ(lines.count(), after_end);
 }
 
 TEST(CliHeartbeat, AShortStepSaysNothingAndEndsAtOnce) {

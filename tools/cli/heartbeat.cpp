@@ -1,5 +1,6 @@
 #include "cli/heartbeat.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 
@@ -23,15 +24,17 @@ Heartbeat::~Heartbeat() {
 void Heartbeat::beat() {
   const auto start = std::chrono::steady_clock::now();
   std::unique_lock<std::mutex> lock(mutex_);
-  for (auto next = start + interval_; !stopped_.wait_until(lock, next, [this] { return stop_; });
-       next += interval_) {
-    const auto seconds =
-        std::chrono::duration_cast<std::chrono::seconds>(std::chrono::steady_clock::now() - start);
-    lock.unlock();  // said outside the lock
+  for (auto next = start + interval_; !stopped_.wait_until(lock, next, [this] { return stop_; });) {
+    const auto now = std::chrono::steady_clock::now();
+    const auto seconds = std::chrono::duration_cast<std::chrono::seconds>(now - start);
+    next = std::max(next + interval_, now + interval_);  // no burst after a stall (SIGSTOP)
+    lock.unlock();                                       // said outside the lock
     try {
       say_(what_ + ": still working (" + std::to_string(seconds.count()) + " s)");
     } catch (const std::exception& e) {  // a line that cannot be said must not end the program
       std::fprintf(stderr, "heartbeat: %s\n", e.what());
+    } catch (...) {
+      std::fprintf(stderr, "heartbeat: a line could not be said\n");
     }
     lock.lock();
   }

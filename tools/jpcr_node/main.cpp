@@ -349,7 +349,8 @@ int node_main(int argc, char** argv) {
       "frames the node is too\n"
       "slow for (more than dds.image_history_depth waiting) are dropped, counted and logged,\n"
       "unless dds.input_history is keep_all: a reliable keep_all camera (jpcr_dds_play with\n"
-      "the same --params) then waits for the node and every frame is processed.\n"
+      "the same --params) then waits for the node and every frame is processed (not with\n"
+      "--role frontend; a keep_last camera still loses frames, uncounted).\n"
       "--role frontend / backend split the pipeline over two processes (two hosts) joined by\n"
       "PREFIX keyframe: the front end publishes odom (its own poses) and sends each keyframe\n"
       "(depth, camera, pose, the poses of the frames since the previous keyframe); the back\n"
@@ -413,6 +414,15 @@ int node_main(int argc, char** argv) {
     o.backend_wait = milliseconds_of(backend_wait);
     o.pipeline.validate();
     o.dds = cli::dds_config_from(args);
+    // Cyclone holds a KEEP_ALL camera back by retrying the full reader on its receive thread, so
+    // nothing else reaches the process meanwhile, the back end's acknowledgements included: the
+    // front end, waiting for them to send a keyframe, never takes the next image (a deadlock,
+    // review of 2026-12-06).
+    if (role == "frontend" && o.dds.input_keep_all)
+      throw InputError(
+          "dds.input_history: keep_all cannot pace a split front end (its keyframe queue waits for "
+          "acknowledgements that the held-back input blocks); use keep_last with a deep "
+          "image_history_depth, or --role all");
 
     const DdsParticipant participant(o.dds);
     cli::install_stop_signal_handler();
