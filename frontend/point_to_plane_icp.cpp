@@ -118,14 +118,6 @@ Observability noise_corrected_degeneracy(const NormalEquations& eq, double max_n
 // degeneracy_threshold judges them.
 constexpr double kUnobserved = 1e-5;
 
-// The Gauss-Newton step of (H + λ tr(H)/6 I) ξ = −b (method.md §10: the minus sign the paper
-// lacks) restricted to the directions the geometry observes. Along a direction G does not
-// observe (a corridor's axis, a plane's in-plane motions) the gradient is the normals' noise,
-// and the full step moved the pose there by 8.9 mm in a noise-free pair of a corridor, past
-// max_translation in 5 of 9 pairs of a corridor walk. Such directions are taken out of the step
-// (the step minimises the linearisation over the rest, as a degeneracy-aware solver does: Zhang,
-// Kaess and Singh, ICRA 2016); they keep the initial guess. Only where the noise correction holds
-// (σ² ≤ kCorrectableNormalNoise): beyond it G is not the geometry's.
 // How many of the unit-free G's eigenvalues (ascending) are below kUnobserved λmax: 0 where the
 // noise correction does not hold (σ² > kCorrectableNormalNoise) or G is zero.
 int unobserved_count(const UnitFreeGeometry& g, const Vector6d& l) {
@@ -136,6 +128,14 @@ int unobserved_count(const UnitFreeGeometry& g, const Vector6d& l) {
   return unobserved;
 }
 
+// The Gauss-Newton step of (H + λ tr(H)/6 I) ξ = −b (method.md §10: the minus sign the paper
+// lacks) restricted to the directions the geometry observes. Along a direction G does not
+// observe (a corridor's axis, a plane's in-plane motions) the gradient is the normals' noise,
+// and the full step moved the pose there by 8.9 mm in a noise-free pair of a corridor, past
+// max_translation in 5 of 9 pairs of a corridor walk. Such directions are taken out of the step
+// (the step minimises the linearisation over the rest, as a degeneracy-aware solver does: Zhang,
+// Kaess and Singh, ICRA 2016); they keep the initial guess. Only where the noise correction holds
+// (σ² ≤ kCorrectableNormalNoise): beyond it G is not the geometry's.
 Vector6d observable_step(const NormalEquations& eq, const IcpParams& params) {
   Matrix6d H = eq.hessian();
   H.diagonal().array() += params.damping * H.trace() / 6.0;
