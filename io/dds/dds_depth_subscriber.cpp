@@ -304,6 +304,24 @@ void DdsDepthSubscriber::log_camera_info_wait() {
         << std::endl;
 }
 
+// KEEP_ALL: a KEEP_LAST publisher is not held back, and Cyclone does not report the images it
+// drops for want of room (30 played, 8 processed, 0 counted): said once, when one matches.
+void DdsDepthSubscriber::log_keep_last_publishers() {
+  State& s = *state_;
+  if (!s.keep_all || keep_last_publisher_logged_) return;
+  const int publishers = s.depth.matched();
+  if (publishers == publishers_seen_) return;
+  publishers_seen_ = publishers;
+  if (publishers == 0 || s.depth.matched_keep_last_writers() == 0) return;
+  keep_last_publisher_logged_ = true;
+  *log_ << "jpcr dds: " << config_.depth_topic
+        << ": a publisher keeps only its last images (KEEP_LAST): dds.input_history: keep_all "
+           "cannot hold it back, and the frames it sends while the queue is full are lost "
+           "without being counted as dropped (publish with KEEP_ALL, as jpcr_dds_play does with "
+           "the same setting, or use keep_last)"
+        << std::endl;
+}
+
 // Decodes what the listeners queued (camera_info first, as a camera driver publishes it first),
 // outside the lock so that Cyclone's receive thread never waits for a decode.
 void DdsDepthSubscriber::process() {
@@ -339,6 +357,7 @@ void DdsDepthSubscriber::process() {
   }
   s.take_waiting_depth(s.frames.size());
   log_camera_info_wait();
+  log_keep_last_publishers();
   std::deque<ReceivedImage> images;
   std::size_t dropped = 0;
   {

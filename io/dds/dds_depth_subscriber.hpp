@@ -14,7 +14,7 @@
 // (Cyclone holds its writes back while the reader is full). Cyclone does so by retrying the full
 // reader on its receive thread, so nothing else reaches the process meanwhile: a camera_info that
 // comes only after the reader filled never arrives (said after 5 s), and a KEEP_LAST camera is
-// not held back, its frames lost uncounted (README).
+// not held back, its frames lost uncounted (said once such a publisher matches; README).
 //
 // The depth is used as received: it must be rectified (a driver's image_rect topic; what
 // jpcr_dds_play publishes is), and its intrinsics are the camera_info's P, the rectified
@@ -81,6 +81,7 @@ class DdsDepthSubscriber {
   std::string other_camera(const std::string& frame_id) const;
   void log_incompatible(const std::string& topic, std::atomic<int>& policy);
   void log_camera_info_wait();
+  void log_keep_last_publishers();
   static constexpr std::chrono::seconds kCameraInfoPatience{5};
 
   DdsConfig config_;
@@ -101,6 +102,8 @@ class DdsDepthSubscriber {
   // that was said (once, after kCameraInfoPatience).
   std::optional<std::chrono::steady_clock::time_point> waiting_for_camera_info_;
   bool camera_info_wait_logged_ = false;
+  int publishers_seen_ = 0;  // KEEP_ALL: depth publishers at the last look
+  bool keep_last_publisher_logged_ = false;
 };
 
 }  // namespace jpcr

@@ -123,6 +123,27 @@ int DdsEndpoint::matched_readers_with(const std::string& user_data) const {
   return count;
 }
 
+int DdsEndpoint::matched_keep_last_writers() const {
+  if (kind_ != Kind::kReader) throw DdsError(name_ + ": matched_keep_last_writers needs a reader");
+  std::vector<dds_instance_handle_t> writers(static_cast<std::size_t>(matched()) + 4);
+  const dds_return_t n =
+      check_dds(dds_get_matched_publications(endpoint_.get(), writers.data(), writers.size()),
+                "dds_get_matched_publications(" + name_ + ")");
+  int count = 0;
+  for (dds_return_t i = 0; i < std::min<dds_return_t>(n, writers.size()); ++i) {
+    // NULL when the writer went away meanwhile.
+    dds_builtintopic_endpoint_t* writer =
+        dds_get_matched_publication_data(endpoint_.get(), writers[static_cast<std::size_t>(i)]);
+    if (writer == nullptr) continue;
+    dds_history_kind_t kind = DDS_HISTORY_KEEP_LAST;  // the default, when the QoS does not say
+    int32_t depth = 0;
+    dds_qget_history(writer->qos, &kind, &depth);
+    if (kind == DDS_HISTORY_KEEP_LAST) ++count;
+    dds_builtintopic_free_endpoint(writer);
+  }
+  return count;
+}
+
 bool DdsEndpoint::wait_matched(int count, std::chrono::steady_clock::time_point deadline,
                                const std::function<bool()>& keep_waiting) const {
   while (matched() < count) {

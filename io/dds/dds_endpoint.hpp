@@ -56,6 +56,9 @@ class DdsEndpoint {
   int matched() const;
   /// A writer: its matched readers whose USER_DATA (DdsQos::user_data) is `user_data`.
   int matched_readers_with(const std::string& user_data) const;
+  /// A reader: its matched writers whose history is KEEP_LAST (which a KEEP_ALL reader's
+  /// resource limit cannot hold back).
+  int matched_keep_last_writers() const;
   /// Waits until at least `count` endpoints are matched by `deadline`; false on timeout, or as
   /// soon as keep_waiting (when given, e.g. "no stop signal yet") says no.
   bool wait_matched(int count, std::chrono::steady_clock::time_point deadline,

@@ -365,6 +365,26 @@ TEST_F(DdsDepth, FramesWaitingForASlowCallerStayWithinTheQueue) {
   EXPECT_DOUBLE_EQ(left.back(), 2.0 * kRounds) << "the oldest go, the newest stays";
 }
 
+// A keep_all caller cannot hold a KEEP_LAST camera back, and the frames that camera loses are
+// not reported by Cyclone: the subscriber says so once the camera matches, and not for a
+// KEEP_ALL one.
+TEST_F(DdsDepth, AKeepAllCallerNamesAKeepLastCamera) {
+  DdsConfig node_config = config_;
+  node_config.input_keep_all = true;
+  for (const bool camera_keeps_all : {true, false}) {
+    DdsConfig camera_config = config_;
+    camera_config.input_keep_all = camera_keeps_all;
+    std::ostringstream log;
+    DdsDepthSubscriber subscriber(node_side_, node_config, &log);
+    DdsDepthPublisher publisher(camera_side_, camera_config, DepthEncoding::kMetres32);
+    ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
+    ASSERT_TRUE(test::eventually([&] { return subscriber.matched() == 1; }));
+    publisher.publish(test_frame(1.0));
+    ASSERT_TRUE(subscriber.wait_frame(kTimeout).has_value());
+    EXPECT_EQ(log.str().find("KEEP_LAST") != std::string::npos, !camera_keeps_all) << log.str();
+  }
+}
+
 // dds.input_history: keep_all on both sides: a camera publishing as fast as it can to a caller
 // that takes a frame every 30 ms waits for it, and every frame arrives, in order, none dropped.
 TEST_F(DdsDepth, AKeepAllCameraWaitsForASlowCallerAndNothingIsDropped) {
