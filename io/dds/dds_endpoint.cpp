@@ -100,48 +100,49 @@ int DdsEndpoint::matched() const {
   return static_cast<int>(status.current_count);
 }
 
-int DdsEndpoint::matched_readers_with(const std::string& user_data) const {
-  if (kind_ != Kind::kWriter) throw DdsError(name_ + ": matched_readers_with needs a writer");
-  std::vector<dds_instance_handle_t> readers(static_cast<std::size_t>(matched()) + 4);
-  const dds_return_t n =
-      check_dds(dds_get_matched_subscriptions(endpoint_.get(), readers.data(), readers.size()),
-                "dds_get_matched_subscriptions(" + name_ + ")");
+// The matched endpoints of the other side (a writer's readers, a reader's writers) whose QoS
+// `counts` accepts.
+int DdsEndpoint::count_matched(const std::function<bool(const dds_qos_t*)>& counts) const {
+  const bool writer = kind_ == Kind::kWriter;
+  std::vector<dds_instance_handle_t> handles(static_cast<std::size_t>(matched()) + 4);
+  const dds_return_t n = check_dds(
+      writer ? dds_get_matched_subscriptions(endpoint_.get(), handles.data(), handles.size())
+             : dds_get_matched_publications(endpoint_.get(), handles.data(), handles.size()),
+      "dds_get_matched_" + std::string(writer ? "subscriptions(" : "publications(") + name_ + ")");
   int count = 0;
-  for (dds_return_t i = 0; i < std::min<dds_return_t>(n, readers.size()); ++i) {
-    // NULL when the reader went away meanwhile.
-    dds_builtintopic_endpoint_t* reader =
-        dds_get_matched_subscription_data(endpoint_.get(), readers[static_cast<std::size_t>(i)]);
-    if (reader == nullptr) continue;
-    void* value = nullptr;
-    std::size_t size = 0;
-    if (dds_qget_userdata(reader->qos, &value, &size) && size == user_data.size() &&
-        std::memcmp(value, user_data.data(), size) == 0)
-      ++count;
-    dds_free(value);
-    dds_builtintopic_free_endpoint(reader);
+  for (dds_return_t i = 0; i < std::min<dds_return_t>(n, handles.size()); ++i) {
+    const dds_instance_handle_t h = handles[static_cast<std::size_t>(i)];
+    // NULL when the endpoint went away meanwhile.
+    dds_builtintopic_endpoint_t* other = writer
+                                             ? dds_get_matched_subscription_data(endpoint_.get(), h)
+                                             : dds_get_matched_publication_data(endpoint_.get(), h);
+    if (other == nullptr) continue;
+    if (counts(other->qos)) ++count;
+    dds_builtintopic_free_endpoint(other);
   }
   return count;
 }
 
+int DdsEndpoint::matched_readers_with(const std::string& user_data) const {
+  if (kind_ != Kind::kWriter) throw DdsError(name_ + ": matched_readers_with needs a writer");
+  return count_matched([&](const dds_qos_t* qos) {
+    void* value = nullptr;
+    std::size_t size = 0;
+    const bool same = dds_qget_userdata(qos, &value, &size) && size == user_data.size() &&
+                      std::memcmp(value, user_data.data(), size) == 0;
+    dds_free(value);
+    return same;
+  });
+}
+
 int DdsEndpoint::matched_keep_last_writers() const {
   if (kind_ != Kind::kReader) throw DdsError(name_ + ": matched_keep_last_writers needs a reader");
-  std::vector<dds_instance_handle_t> writers(static_cast<std::size_t>(matched()) + 4);
-  const dds_return_t n =
-      check_dds(dds_get_matched_publications(endpoint_.get(), writers.data(), writers.size()),
-                "dds_get_matched_publications(" + name_ + ")");
-  int count = 0;
-  for (dds_return_t i = 0; i < std::min<dds_return_t>(n, writers.size()); ++i) {
-    // NULL when the writer went away meanwhile.
-    dds_builtintopic_endpoint_t* writer =
-        dds_get_matched_publication_data(endpoint_.get(), writers[static_cast<std::size_t>(i)]);
-    if (writer == nullptr) continue;
+  return count_matched([](const dds_qos_t* qos) {
     dds_history_kind_t kind = DDS_HISTORY_KEEP_LAST;  // the default, when the QoS does not say
     int32_t depth = 0;
-    dds_qget_history(writer->qos, &kind, &depth);
-    if (kind == DDS_HISTORY_KEEP_LAST) ++count;
-    dds_builtintopic_free_endpoint(writer);
-  }
-  return count;
+    dds_qget_history(qos, &kind, &depth);
+    return kind == DDS_HISTORY_KEEP_LAST;
+  });
 }
 
 bool DdsEndpoint::wait_matched(int count, std::chrono::steady_clock::time_point deadline,

@@ -77,6 +77,8 @@ class DdsEndpoint {
   /// Waits for data; true when there is some.
   bool wait_data(std::chrono::nanoseconds timeout) const;
 
+  int count_matched(const std::function<bool(const dds_qos_t*)>& counts) const;
+
   std::string name_;
   Kind kind_;
   DdsEntity topic_, endpoint_, condition_, waitset_;
