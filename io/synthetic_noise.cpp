@@ -12,6 +12,9 @@ namespace jpcr {
 namespace {
 
 constexpr double kDegree = EIGEN_PI / 180.0;
+// Range noise above 100 % of the range leaves no depth that describes the scene (and at 1e308 %
+// every factor overflows to no measurement): refused instead of writing such frames.
+constexpr double kMaxRangePercent = 100.0;
 
 // Range noise: the range r becomes r (1 + σ_rel g), and z with it (same ray). A factor ≤ 0 (only
 // possible for σ_rel of tens of percent) is no measurement.
@@ -103,8 +106,9 @@ NoiseModel parse_noise(const std::string& spec) {
   if (spec.rfind(prefix, 0) == 0) {
     double percent = 0.0;
     if (!parse_double(spec.substr(prefix.size()), percent) || !std::isfinite(percent) ||
-        percent < 0.0) {
-      throw InputError("noise '" + spec + "': range:K needs a percentage K ≥ 0, e.g. range:1");
+        percent < 0.0 || percent > kMaxRangePercent) {
+      throw InputError("noise '" + spec +
+                       "': range:K needs a percentage 0 ≤ K ≤ 100, e.g. range:1");
     }
     model.kind = NoiseKind::kRange;
     model.range_percent = percent;

@@ -159,8 +159,9 @@ TEST(SyntheticNoise, ParsingAndDescription) {
   EXPECT_EQ(r.describe(), "range:1.5");
   EXPECT_EQ(parse_noise(r.describe()).range_percent, 1.5);
   EXPECT_EQ(parse_noise("range:0").describe(), "range:0");
+  EXPECT_EQ(parse_noise("range:100").range_percent, 100.0);
   for (const char* bad : {"range", "range:", "range:-1", "range:abc", "range:1%", "gauss", "",
-                          "range:nan", "Kinect"}) {
+                          "range:nan", "Kinect", "range:100.5", "range:1e308", "range:inf"}) {
     EXPECT_THROW(parse_noise(bad), InputError) << bad;
   }
   try {

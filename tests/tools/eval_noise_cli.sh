@@ -93,7 +93,7 @@ expect 2 "noise-matched needs --noise range:K" -- "$eval_bin" noise --noise kine
 expect 2 "noise-matched needs --noise range:K with K > 0" -- "$eval_bin" noise --noise range:0 \
   --noise-matched
 expect 2 "motion must be a finite scale" -- "$eval_bin" noise "${small[@]}" --motion nan
-expect 2 "range:K needs a percentage K ≥ 0" -- "$eval_bin" noise --noise range:-1
+expect 2 "range:K needs a percentage 0 ≤ K ≤ 100" -- "$eval_bin" noise --noise range:-1
 expect 1 "bad.yaml" -- "$eval_bin" noise "${small[@]}" --params "$tmp/bad.yaml"
 # A min_samples the pattern scaled to these images cannot hold: refused before the study, with
 # the file that sets it.
@@ -102,7 +102,8 @@ expect 1 "many.yaml: quadric: min_samples: 110 exceeds the" -- "$eval_bin" noise
   --draws 2 --params "$tmp/many.yaml"
 # Draws whose refinement failed keep their start pose; counting them would report the start's
 # error (zero from the true pose) as the method's. With no usable draw there is no study.
-expect 1 "usable result in 0 of 2 draws" -- "$eval_bin" noise --size 64x48 --noise range:1e300 --draws 2 --device cpu
+expect 1 "usable result in 0 of 2 draws" -- "$eval_bin" noise --size 64x48 --noise range:100 --draws 2 --device cpu
+expect 2 "0 ≤ K ≤ 100" -- "$eval_bin" noise --size 64x48 --noise range:1e300 --draws 2 --device cpu
 expect 1 "no_such_scene" -- "$eval_bin" noise --size 80x60 --scene no_such_scene
 expect 0 "usage: jpcr_eval noise" -- "$eval_bin" noise --help
 exit $fail

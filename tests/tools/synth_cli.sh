@@ -80,6 +80,7 @@ expect 0 "usage: jpcr_synth" -- "$synth" --help
 expect 0 "room_spheres" -- "$synth" --help
 expect 2 "out is required" -- "$synth" --frames 2
 expect 2 "range:K needs a percentage" -- "$synth" --noise range:abc --out "$tmp/x"
+expect 2 "range:K needs a percentage 0 ≤ K ≤ 100" -- "$synth" --noise range:1e308 --out "$tmp/x"
 expect 2 "unknown trajectory 'spiral'" -- "$synth" --trajectory spiral --out "$tmp/x"
 expect 2 "WIDTHxHEIGHT" -- "$synth" --size 640 --out "$tmp/x"
 expect 2 "frames must be in 1..1000000" -- "$synth" --frames 0 --out "$tmp/x"

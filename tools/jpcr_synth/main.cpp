@@ -45,7 +45,8 @@ int run(int argc, char** argv) {
               "room_spheres")
       .option("trajectory", "rail (10 mm per frame, translation only) | orbit | walk", "walk")
       .option("frames", "number of frames, 1..1000000", "100")
-      .option("noise", "none | range:PCT (Gaussian along the ray, PCT % of the range) | kinect",
+      .option("noise",
+              "none | range:PCT (Gaussian along the ray, PCT % of the range, 0-100) | kinect",
               "none")
       .option("size",
               "image size WIDTHxHEIGHT; the camera is scaled to it, fx by the width's ratio and "
