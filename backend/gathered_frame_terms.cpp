@@ -89,18 +89,6 @@ int GatheredFrameTerms<Lane>::gather(const VertexView& view, const RigidMotion<d
 }
 
 template <typename Lane>
-void GatheredFrameTerms<Lane>::weigh_distances_at(const RigidMotion<double>& T_weight,
-                                                  const Eigen::Vector3d& centre) {
-  const float *qx = raw_.data(), *qy = qx + capacity_, *qz = qy + capacity_;
-  const Eigen::Vector3d offset = T_weight.t - centre;
-  Lane* d2 = sample(3);
-  for (int k = 0; k < gathered_; ++k) {
-    const Eigen::Vector3d e = T_weight.R * Eigen::Vector3d(qx[k], qy[k], qz[k]) + offset;
-    d2[k] = static_cast<Lane>(e.squaredNorm());
-  }
-}
-
-template <typename Lane>
 void GatheredFrameTerms<Lane>::accumulate(const Quadricd& q, const SampleGate<double>& limits,
                                           bool with_pose, double ray_min_cos2,
                                           FrameTerms<double>& out) {
@@ -153,6 +141,26 @@ double GatheredFrameTerms<Lane>::cost(const Quadricd& q, const SampleGate<double
   const SampleCosts costs =
       sample_costs<Lane>(qs, {sample(0), sample(1), sample(2), sample(3), sample(4), n_},
                          static_cast<Lane>(limits.gate), static_cast<Lane>(limits.n0));
+  count = costs.count;
+  return costs.gated;
+}
+
+template <typename Lane>
+double GatheredFrameTerms<Lane>::held_cost(const Quadricd& q, const Quadricd& q_weight,
+                                           const RigidMotion<double>& T_weight,
+                                           const SampleGate<double>& limits, int& count) {
+  // Each sample's r_h² + d² at (q_weight, T_weight) replaces its d² (frame_cost).
+  const float *qx = raw_.data(), *qy = qx + capacity_, *qz = qy + capacity_;
+  Lane* held = sample(3);
+  for (int k = 0; k < gathered_; ++k) {
+    const Eigen::Vector3d X = T_weight.apply(Eigen::Vector3d(qx[k], qy[k], qz[k]));
+    const double r = std::clamp(quadric_residual(q_weight, X), -limits.gate, limits.gate);
+    held[k] = static_cast<Lane>((X - q.center).squaredNorm() + r * r);
+  }
+  const QuadricScalars<Lane> qs = QuadricScalars<Lane>::from(q.cast<Lane>());
+  const SampleCosts costs =
+      held_sample_costs<Lane>(qs, {sample(0), sample(1), sample(2), held, sample(4), n_},
+                              static_cast<Lane>(limits.gate), static_cast<Lane>(limits.n0));
   count = costs.count;
   return costs.gated;
 }

@@ -54,9 +54,10 @@ class GatheredFrameTerms {
   /// Σ w r² (gated samples at w(g) g²) and the count inside the gate, for the gathered samples.
   double cost(const Quadricd& q, const SampleGate<double>& limits, int& count);
 
-  /// The distance terms d² = |T_weight Q − p̄|² of the gathered samples' weights at T_weight
-  /// instead of the gather's T (frame_cost's T_weight); the residuals stay at T.
-  void weigh_distances_at(const RigidMotion<double>& T_weight, const Eigen::Vector3d& centre);
+  /// The same cost with every sample's weight held at quadric q_weight and pose T_weight
+  /// (frame_cost's held weights): the gathered samples' residuals stay at the gather's T.
+  double held_cost(const Quadricd& q, const Quadricd& q_weight, const RigidMotion<double>& T_weight,
+                   const SampleGate<double>& limits, int& count);
 
  private:
   Lane* sample(int i) { return samples_.data() + static_cast<std::size_t>(i) * capacity_; }
@@ -88,12 +89,14 @@ class GatheredSampler {
     terms_.gather(view, T, pattern, pattern_size, u, v, q.center);
     terms_.accumulate(q, limits, with_pose, ray_min_cos2, out);
   }
-  double cost(const Quadricd& q, const VertexView& view, const RigidMotion<double>& T,
-              const RigidMotion<double>& T_weight, const PixelOffset* pattern, int pattern_size,
-              int u, int v, const SampleGate<double>& limits, int& count) {
+  double cost(const Quadricd& q, const Quadricd& q_weight, const VertexView& view,
+              const RigidMotion<double>& T, const RigidMotion<double>& T_weight,
+              const PixelOffset* pattern, int pattern_size, int u, int v,
+              const SampleGate<double>& limits, int& count) {
     terms_.gather(view, T, pattern, pattern_size, u, v, q.center);
-    if (!(T_weight.R == T.R && T_weight.t == T.t)) terms_.weigh_distances_at(T_weight, q.center);
-    return terms_.cost(q, limits, count);
+    if (&q == &q_weight && T_weight.R == T.R && T_weight.t == T.t)
+      return terms_.cost(q, limits, count);
+    return terms_.held_cost(q, q_weight, T_weight, limits, count);
   }
 
  private:

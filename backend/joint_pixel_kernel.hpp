@@ -22,7 +22,8 @@
 // and, once the poses are solved, the back-substitution Δγ_p = C_p⁻¹ (b_p − Σ_j B_jpᵀ Δξ_j).
 // The weight w = n₀² / (n₀² + r² + d²) is held fixed in each linearisation (IRLS). The cost is
 // Σ w r²; a sample outside the gate |r| ≤ g is dropped from the normal equations and costs the
-// constant w(g) g², so the cost stays continuous when a sample crosses the gate.
+// constant w(g) g², so the cost stays continuous when a sample crosses the gate. A step is judged
+// with the weights held at its linearisation (linearized_pixel_cost).
 #pragma once
 
 #include <cmath>
@@ -93,6 +94,12 @@ struct FrameTerms {
   Scalar cost = 0;                    // Σ w r², gated samples at w(g) g²
   int count = 0;                      // samples inside the gate
 };
+
+/// The residual as the cost sees it: r inside the gate, the gate outside.
+template <typename Scalar>
+JPCR_HD Scalar gated(Scalar r, const SampleGate<Scalar>& limits) {
+  return r <= limits.gate && r >= -limits.gate ? r : limits.gate;
+}
 
 /// The cost share of one sample at distance² d2 from p̄ (the gate of the file comment), and its
 /// weight w = fair_weight(r, d2, n₀), meaningful when inside.
@@ -189,15 +196,17 @@ JPCR_HD void accumulate_frame_terms(const QuadricT<Scalar>& q, const VertexView&
   }
 }
 
-/// The cost Σ w r² (and the gated count) of one frame's samples, without Jacobians: X = T Q for
-/// the residual, and the distance term d² of the weight at T_weight Q. With T_weight = T it is
-/// the cost accumulate_frame_terms sums; the step test holds T_weight at the linearisation
-/// (linearized_pixel_cost).
+/// The cost Σ w e² (and the gated count) of one frame's samples, without Jacobians, with each
+/// sample's weight held at another state: e is the gated residual at quadric q and X = T Q, and
+/// w = n₀² / (n₀² + e_h² + d²) takes e_h and d² at q_weight and T_weight Q. With q_weight = q and
+/// T_weight = T it is the cost accumulate_frame_terms sums; the step test holds both at the
+/// linearisation (linearized_pixel_cost).
 template <typename Scalar>
-JPCR_HD Scalar frame_cost(const QuadricT<Scalar>& q, const VertexView& view,
-                          const RigidMotion<Scalar>& T, const RigidMotion<Scalar>& T_weight,
-                          const PixelOffset* pattern, int pattern_size, int u, int v,
-                          const SampleGate<Scalar>& limits, int& count) {
+JPCR_HD Scalar frame_cost(const QuadricT<Scalar>& q, const QuadricT<Scalar>& q_weight,
+                          const VertexView& view, const RigidMotion<Scalar>& T,
+                          const RigidMotion<Scalar>& T_weight, const PixelOffset* pattern,
+                          int pattern_size, int u, int v, const SampleGate<Scalar>& limits,
+                          int& count) {
   Scalar cost = 0;
   count = 0;
   for (int k = 0; k < pattern_size; ++k) {
@@ -206,12 +215,13 @@ JPCR_HD Scalar frame_cost(const QuadricT<Scalar>& q, const VertexView& view,
     const Eigen::Vector3f& Qf = view(su, sv);
     if (!is_sample_point(Qf)) continue;  // all three coordinates, as Quad IT
     const Eigen::Matrix<Scalar, 3, 1> Q = Qf.template cast<Scalar>();
-    const Eigen::Matrix<Scalar, 3, 1> X = T.apply(Q);
-    const Scalar d2 = (T_weight.apply(Q) - q.center).squaredNorm();
-    bool inside = false;
-    Scalar w = 0;
-    cost += gated_cost(quadric_residual(q, X), d2, limits, inside, w);
-    count += inside ? 1 : 0;
+    const Eigen::Matrix<Scalar, 3, 1> X_weight = T_weight.apply(Q);
+    const Scalar d2 = (X_weight - q.center).squaredNorm();
+    const Scalar w =
+        fair_weight(gated(quadric_residual(q_weight, X_weight), limits), d2, limits.n0);
+    const Scalar r = quadric_residual(q, T.apply(Q));
+    cost += w * gated(r, limits) * gated(r, limits);
+    count += r <= limits.gate && r >= -limits.gate ? 1 : 0;
   }
   return cost;
 }
@@ -228,11 +238,12 @@ struct DirectSampler {
     accumulate_frame_terms(q, view, T, with_pose, ray_min_cos2, pattern, pattern_size, u, v, limits,
                            out);
   }
-  JPCR_HD Scalar cost(const QuadricT<Scalar>& q, const VertexView& view,
-                      const RigidMotion<Scalar>& T, const RigidMotion<Scalar>& T_weight,
-                      const PixelOffset* pattern, int pattern_size, int u, int v,
-                      const SampleGate<Scalar>& limits, int& count) const {
-    return frame_cost(q, view, T, T_weight, pattern, pattern_size, u, v, limits, count);
+  JPCR_HD Scalar cost(const QuadricT<Scalar>& q, const QuadricT<Scalar>& q_weight,
+                      const VertexView& view, const RigidMotion<Scalar>& T,
+                      const RigidMotion<Scalar>& T_weight, const PixelOffset* pattern,
+                      int pattern_size, int u, int v, const SampleGate<Scalar>& limits,
+                      int& count) const {
+    return frame_cost(q, q_weight, view, T, T_weight, pattern, pattern_size, u, v, limits, count);
   }
 };
 
@@ -426,16 +437,23 @@ JPCR_HD QuadricVector<Scalar> back_substitute(const JointPixelSystem<Scalar, Max
 /// the step only if the robust cost does not increase": the cost the linearisation models): the
 /// frame-1 terms at (u, v) (not in Q-full, whose quadrics are fixed), and each frame
 /// j that saw it there (`seen`: bit j − 1), that frame's pattern taken at the pixel the quadric
-/// was associated to at `window`; each sample's residual at `next`, the distance term d² of its
-/// weight n₀² / (n₀² + r² + d²) at `window` (held, as the normal equations hold the weights).
-/// Samples outside the gate cost w(gate) gate², so a step that moves samples out of it pays for
-/// them. Re-associated at the candidate, a step was credited with the cost of every frame it moved
-/// out of view, and with d² at the candidate, a step that carried a frame's samples far from the
-/// quadrics made their weights vanish: J-full accepted a 170 m step on a corridor (cost 0.0002
-/// against 0.29), and single-pose Q-full accepted steps whose cost on the same pairs rose. The
-/// next linearisation re-associates.
+/// was associated to at `window`; each sample's residual at `next` and quadric q, its weight
+/// n₀² / (n₀² + r² + d²) at `window` and the linearisation's quadric q_lin (held, as the normal
+/// equations hold the weights: IRLS). Samples outside the gate cost w gate², so a step that moves
+/// samples out of it pays for them. With the weights held, the cost is the one whose Gauss-Newton
+/// step the normal equations give, so a small enough damped step always lowers it. With the r²
+/// term of the weight taken at the candidate (Σ w(r) r², the Geman-McClure cost, whose gradient
+/// is 2 w² r (n₀² + d²) / n₀², not the 2 w r of the normal equations), steps near the optimum
+/// raised it to first order: Q-full rejected every step from its 14th linearisation on, at every
+/// damping (a review's reproducer at 160x120, 0.5 % range noise), and J-ftf and J-full ended by
+/// the tolerance on ever smaller damped steps instead of at the stationary point. Re-associated at
+/// the candidate, a step was credited with the cost of every frame it moved out of view, and with
+/// d² at the candidate, a step that carried a frame's samples far from the quadrics made their
+/// weights vanish: J-full accepted a 170 m step on a corridor (cost 0.0002 against 0.29), and
+/// single-pose Q-full accepted steps whose cost on the same pairs rose. The next linearisation
+/// re-associates.
 template <typename Scalar, typename Sampler>
-JPCR_HD Scalar linearized_pixel_cost(const QuadricT<Scalar>& q,
+JPCR_HD Scalar linearized_pixel_cost(const QuadricT<Scalar>& q, const QuadricT<Scalar>& q_lin,
                                      const JointWindowView<Scalar>& window,
                                      const JointWindowView<Scalar>& next, int u, int v,
                                      unsigned seen, const JointTermParams& p, Sampler& sampler) {
@@ -443,14 +461,14 @@ JPCR_HD Scalar linearized_pixel_cost(const QuadricT<Scalar>& q,
   Scalar cost = 0;
   int count = 0;
   if (p.estimate_quadrics)
-    cost += sampler.cost(q, next.views[0], RigidMotion<Scalar>{}, RigidMotion<Scalar>{},
+    cost += sampler.cost(q, q_lin, next.views[0], RigidMotion<Scalar>{}, RigidMotion<Scalar>{},
                          next.pattern, next.pattern_size, u, v, limits, count);
   for (int j = 1; j < window.frames; ++j) {
     if (((seen >> (j - 1)) & 1u) == 0u) continue;
     int su = 0, sv = 0;
     if (!associate(q.center, window.motions[j], window.views[j], window.camera, p, su, sv))
       continue;  // not reached: the frame saw it at these poses (the centre does not move)
-    cost += sampler.cost(q, next.views[j], next.motions[j], window.motions[j], next.pattern,
+    cost += sampler.cost(q, q_lin, next.views[j], next.motions[j], window.motions[j], next.pattern,
                          next.pattern_size, su, sv, limits, count);
   }
   return cost;
@@ -458,12 +476,12 @@ JPCR_HD Scalar linearized_pixel_cost(const QuadricT<Scalar>& q,
 
 /// linearized_pixel_cost with the sample-by-sample sums.
 template <typename Scalar>
-JPCR_HD Scalar linearized_pixel_cost(const QuadricT<Scalar>& q,
+JPCR_HD Scalar linearized_pixel_cost(const QuadricT<Scalar>& q, const QuadricT<Scalar>& q_lin,
                                      const JointWindowView<Scalar>& window,
                                      const JointWindowView<Scalar>& next, int u, int v,
                                      unsigned seen, const JointTermParams& p) {
   DirectSampler<Scalar> sampler;
-  return linearized_pixel_cost(q, window, next, u, v, seen, p, sampler);
+  return linearized_pixel_cost(q, q_lin, window, next, u, v, seen, p, sampler);
 }
 
 }  // namespace jpcr

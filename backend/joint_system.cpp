@@ -94,7 +94,8 @@ double step_row(const JointState& state, const JointWindowView<double>& window,
       out.quadric_steps[i] = back_substitute(sys, window.frames, pose_steps);
       apply_quadric_update(q, out.quadric_steps[i]);
     }
-    cost += linearized_pixel_cost(q, window, next, u, v, seen_bits(sys, window.frames), p, sampler);
+    cost += linearized_pixel_cost(q, state.quadrics[i], window, next, u, v,
+                                  seen_bits(sys, window.frames), p, sampler);
   }
   return cost;
 }
@@ -102,14 +103,15 @@ double step_row(const JointState& state, const JointWindowView<double>& window,
 // J-ftf's step from the kept factors: Δγ_p = k − K Δξ, then the candidate's cost (frame 2 sees
 // every active quadric of a pair).
 template <typename Sampler>
-double step_factors(const PairFactors& f, const JointWindowView<double>& window,
-                    const JointWindowView<double>& next, const JointTermParams& p,
-                    const Vector6d& pose_step, int width, Sampler& sampler, JointStep& out) {
+double step_factors(const PairFactors& f, const JointState& state,
+                    const JointWindowView<double>& window, const JointWindowView<double>& next,
+                    const JointTermParams& p, const Vector6d& pose_step, int width,
+                    Sampler& sampler, JointStep& out) {
   Quadricd& q = out.candidate.quadrics[f.pixel];
   out.quadric_steps[f.pixel] = f.k - f.K * pose_step;
   apply_quadric_update(q, out.quadric_steps[f.pixel]);
   const int u = static_cast<int>(f.pixel % width), v = static_cast<int>(f.pixel / width);
-  return linearized_pixel_cost(q, window, next, u, v, 1u, p, sampler);
+  return linearized_pixel_cost(q, state.quadrics[f.pixel], window, next, u, v, 1u, p, sampler);
 }
 
 // The sums per frame: gathered and vectorised across samples (the default), or sample by sample
@@ -219,7 +221,8 @@ JointWindowView<double> JointSystem::window_view(
           camera_,       pattern_.data(), static_cast<int>(pattern_.size())};
 }
 
-void JointSystem::step_pair(const ReducedSystem& system, const JointWindowView<double>& window,
+void JointSystem::step_pair(const JointState& state, const ReducedSystem& system,
+                            const JointWindowView<double>& window,
                             const JointWindowView<double>& next, JointStep& out) const {
   const long count = static_cast<long>(system.factors.size());
   double cost = 0.0;
@@ -227,8 +230,8 @@ void JointSystem::step_pair(const ReducedSystem& system, const JointWindowView<d
   with_sampler(sampling_, next.pattern_size, [&](auto& sampler) {
 #pragma omp for schedule(dynamic, 256)
     for (long k = 0; k < count; ++k)
-      cost += step_factors(system.factors[static_cast<std::size_t>(k)], window, next, params_,
-                           out.pose_steps[0], width_, sampler, out);
+      cost += step_factors(system.factors[static_cast<std::size_t>(k)], state, window, next,
+                           params_, out.pose_steps[0], width_, sampler, out);
   });
   out.cost = cost;
 }
@@ -244,8 +247,8 @@ void JointSystem::step_fixed(const JointState& state, const ReducedSystem& syste
     for (long k = 0; k < count; ++k) {
       const FixedPixel& f = system.fixed_active[static_cast<std::size_t>(k)];
       const int u = static_cast<int>(f.pixel % width_), v = static_cast<int>(f.pixel / width_);
-      cost += linearized_pixel_cost(state.quadrics[f.pixel], window, next, u, v, f.seen, params_,
-                                    sampler);
+      const Quadricd& q = state.quadrics[f.pixel];  // fixed: Q-full
+      cost += linearized_pixel_cost(q, q, window, next, u, v, f.seen, params_, sampler);
     }
   });
   out.cost = cost;
@@ -283,7 +286,7 @@ void JointSystem::step(const JointState& state, const ReducedSystem& system, dou
   if (!params_.estimate_quadrics)
     step_fixed(state, system, window, next, out);
   else if (frames() == 2)
-    step_pair(system, window, next, out);
+    step_pair(state, system, window, next, out);
   else
     step_window(state, lambda, window, next, out);
 }
@@ -302,8 +305,9 @@ std::vector<int> reference_inliers(const VertexMap& reference, const Neighbourho
         const std::size_t i = static_cast<std::size_t>(v) * width + u;
         if (!state.valid[i]) continue;
         const Quadricd& q = state.quadrics[i];
-        sampler.cost(q, view, RigidMotion<double>{}, RigidMotion<double>{}, pattern.offsets.data(),
-                     pattern_size, u, v, SampleGate<double>::at(params.fit, q.center), count[i]);
+        sampler.cost(q, q, view, RigidMotion<double>{}, RigidMotion<double>{},
+                     pattern.offsets.data(), pattern_size, u, v,
+                     SampleGate<double>::at(params.fit, q.center), count[i]);
       }
   });
   return count;

@@ -105,8 +105,9 @@ class JointSystem {
   /// The window seen from `motions` (one per frame, T_j as RigidMotion).
   JointWindowView<double> window_view(const std::vector<RigidMotion<double>>& motions) const;
   // Each costs the candidate: `window` at the linearisation's poses, `next` at the candidate's.
-  void step_pair(const ReducedSystem& system, const JointWindowView<double>& window,
-                 const JointWindowView<double>& next, JointStep& out) const;
+  void step_pair(const JointState& state, const ReducedSystem& system,
+                 const JointWindowView<double>& window, const JointWindowView<double>& next,
+                 JointStep& out) const;
   void step_fixed(const JointState& state, const ReducedSystem& system,
                   const JointWindowView<double>& window, const JointWindowView<double>& next,
                   JointStep& out) const;

@@ -176,7 +176,8 @@ __global__ void __launch_bounds__(kThreads)
   if (u < next.width && v < next.height) {
     const int i = v * next.width + u;
     const std::size_t pixels = static_cast<std::size_t>(next.width) * next.height;
-    Quadricd q = quadrics[i];
+    const Quadricd q_lin = quadrics[i];
+    Quadricd q = q_lin;
     if (active[i]) {
       QuadricVector<Scalar> delta;  // Δγ_p = k − K Δξ
 #pragma unroll
@@ -188,8 +189,9 @@ __global__ void __launch_bounds__(kThreads)
         for (int r = 0; r < 6; ++r)
           delta(r) -= factors[(6 + 6 * c + r) * pixels + i] * pose_step.xi[c];
       apply_quadric_update(q, QuadricVector<double>(delta.template cast<double>()));
-      cost[0] = double(linearized_pixel_cost(q.template cast<Scalar>(), linearized.window(),
-                                             next.window(), u, v, 1u, params));
+      cost[0] =
+          double(linearized_pixel_cost(q.template cast<Scalar>(), q_lin.template cast<Scalar>(),
+                                       linearized.window(), next.window(), u, v, 1u, params));
     }
     candidate[i] = q;
   }

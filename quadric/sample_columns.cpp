@@ -22,6 +22,16 @@ inline void gate_sample(Lane r, Lane d2, Lane mask, Lane gate, Lane n0, Lane& in
   w = inside * we;
 }
 
+// The same cost share with the weight held: `held` is r_h² + d² of the weight at the
+// linearisation (GatheredFrameTerms::hold_weights_at), so w = n₀² / (n₀² + held).
+template <typename Lane>
+inline void held_sample(Lane r, Lane held, Lane mask, Lane gate, Lane n0, Lane& inside,
+                        Lane& gated_cost) {
+  inside = mask * (std::abs(r) <= gate ? Lane(1) : Lane(0));
+  const Lane e = inside > Lane(0) ? r : gate;
+  gated_cost = mask * fair_weight(Lane(0), held, n0) * e * e;
+}
+
 template <typename Lane, int kColumns>
 JPCR_SIMD_CLONES SampleCosts fill_columns(const QuadricScalars<Lane>& qs, const Lane* __restrict dx,
                                           const Lane* __restrict dy, const Lane* __restrict dz,
@@ -90,6 +100,24 @@ JPCR_SIMD_CLONES SampleCosts costs(const QuadricScalars<Lane>& qs, const Lane* _
     count_sum += inside;
   }
   return {gated_sum, inlier_sum, static_cast<int>(count_sum)};
+}
+
+template <typename Lane>
+JPCR_SIMD_CLONES SampleCosts held_costs(const QuadricScalars<Lane>& qs, const Lane* __restrict dx,
+                                        const Lane* __restrict dy, const Lane* __restrict dz,
+                                        const Lane* __restrict held, const Lane* __restrict mask,
+                                        int n, Lane gate, Lane n0) {
+  constexpr int kLanes = 32 / sizeof(Lane);  // one AVX register
+  Lane gated_sum = 0, count_sum = 0;
+#pragma omp simd simdlen(kLanes) reduction(+ : gated_sum, count_sum)
+  for (int k = 0; k < n; ++k) {
+    const SampleLinearization<Lane> l = linearize_sample(qs, dx[k], dy[k], dz[k]);
+    Lane inside, c;
+    held_sample(l.r, held[k], mask[k], gate, n0, inside, c);
+    gated_sum += c;
+    count_sum += inside;
+  }
+  return {gated_sum, 0.0, static_cast<int>(count_sum)};
 }
 
 // A register of lanes (GCC/Clang vector extension; the baseline clone splits it in two).
@@ -173,6 +201,12 @@ SampleCosts sample_costs(const QuadricScalars<Lane>& qs, const GatheredSamples<L
 }
 
 template <typename Lane>
+SampleCosts held_sample_costs(const QuadricScalars<Lane>& qs, const GatheredSamples<Lane>& s,
+                              Lane gate, Lane n0) {
+  return held_costs<Lane>(qs, s.dx, s.dy, s.dz, s.d2, s.mask, s.n, gate, n0);
+}
+
+template <typename Lane>
 void column_products(const Lane* columns, int n, int stride, int cols, double* Y) {
   products<Lane>(columns, n, stride, cols, Y);
 }
@@ -197,6 +231,10 @@ template SampleCosts sample_costs<float>(const QuadricScalars<float>&,
                                          const GatheredSamples<float>&, float, float);
 template SampleCosts sample_costs<double>(const QuadricScalars<double>&,
                                           const GatheredSamples<double>&, double, double);
+template SampleCosts held_sample_costs<float>(const QuadricScalars<float>&,
+                                              const GatheredSamples<float>&, float, float);
+template SampleCosts held_sample_costs<double>(const QuadricScalars<double>&,
+                                               const GatheredSamples<double>&, double, double);
 template void column_products<float>(const float*, int, int, int, double*);
 template void column_products<double>(const double*, int, int, int, double*);
 

@@ -61,6 +61,12 @@ template <typename Lane>
 SampleCosts sample_costs(const QuadricScalars<Lane>& qs, const GatheredSamples<Lane>& s, Lane gate,
                          Lane n0);
 
+/// The gated cost Σ w e² with each sample's weight held: s.d2 holds r_h² + d² of the weight
+/// n₀² / (n₀² + r_h² + d²) at another state (the joint systems' step test); `inliers` is 0.
+template <typename Lane>
+SampleCosts held_sample_costs(const QuadricScalars<Lane>& qs, const GatheredSamples<Lane>& s,
+                              Lane gate, Lane n0);
+
 /// Y = Σ_k c_k c_kᵀ over the first `cols` columns (n samples, stride lanes apart), into the
 /// row-major 10 x 10 array Y (both triangles), accumulated in lanes and summed in double.
 template <typename Lane>

@@ -68,24 +68,32 @@ double worst_frame_terms_difference(int& compared, float ray_min_cosine) {
     sampler.accumulate(q, view2, T, true, foot, pattern.offsets.data(), pattern.size(), su, sv,
                        limits, gathered);
     int count = 0;
-    const double cost =
-        sampler.cost(q, view2, T, T, pattern.offsets.data(), pattern.size(), su, sv, limits, count);
+    const double cost = sampler.cost(q, q, view2, T, T, pattern.offsets.data(), pattern.size(), su,
+                                     sv, limits, count);
     EXPECT_EQ(gathered.count, reference.count);
     EXPECT_EQ(count, reference.count);
     EXPECT_NEAR(cost, reference.cost, 1e-5 * reference.cost);
-    // The step test's cost: residuals at T, the weights' distances at another motion (5 cm
-    // away), as frame_cost computes them sample by sample.
+    // The step test's cost: residuals at T and q, the weights held at another motion (5 cm
+    // away) and another quadric (offset 4 mm, curved), as frame_cost computes them sample by
+    // sample.
     RigidMotion<double> moved = T;
     moved.t += Eigen::Vector3d(0.05, -0.03, 0.02);
+    Quadricd q_weight = q;
+    q_weight.t_z += 0.004;
+    q_weight.a += 2.0;
     int held_count = 0, direct_count = 0;
-    const double held = sampler.cost(q, view2, T, moved, pattern.offsets.data(), pattern.size(), su,
-                                     sv, limits, held_count);
+    const double held = sampler.cost(q, q_weight, view2, T, moved, pattern.offsets.data(),
+                                     pattern.size(), su, sv, limits, held_count);
     const double direct =
-        frame_cost(q, view2, T, moved, pattern.offsets.data(), static_cast<int>(pattern.size()), su,
-                   sv, limits, direct_count);
+        frame_cost(q, q_weight, view2, T, moved, pattern.offsets.data(),
+                   static_cast<int>(pattern.size()), su, sv, limits, direct_count);
     EXPECT_EQ(held_count, direct_count);
     EXPECT_NEAR(held, direct, 1e-5 * direct);
-    EXPECT_NE(held, cost);  // the distances moved, so the weights did
+    EXPECT_NE(held, cost);  // the distances and residuals moved, so the weights did
+    // Held at q and T themselves, the held cost is the cost.
+    EXPECT_NEAR(frame_cost(q, Quadricd(q), view2, T, T, pattern.offsets.data(),
+                           static_cast<int>(pattern.size()), su, sv, limits, direct_count),
+                reference.cost, 1e-12 * reference.cost);
     worst = std::max(worst, relative_difference(gathered, reference));
     ++compared;
   }
