@@ -89,6 +89,10 @@ QuadricMap refined_map(const QuadricMap& initial, const JointState& state,
   return map;
 }
 
+// The relative rounding of the step test's cost (sums of float lanes; a damped step's cost
+// rose by up to 2e-7 of it near a minimum before the weights were held).
+constexpr double kCostRounding = 1e-6;
+
 }  // namespace
 
 void check_joint_inputs(const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
@@ -167,9 +171,11 @@ RefinementResult run_joint_refinement(JointProblem& problem, const JointParams& 
         continue;
       }
       ++report.rejected_steps;
-      // A step below the tolerances that does not lower the cost: the state is a minimum at the
-      // resolution the tolerances ask for.
-      if (small) {
+      // A step below the tolerances that does not lower the cost beyond its rounding: the state
+      // is a minimum at the resolution the tolerances ask for. A step the cost refuses by more
+      // (NaN, or far above) is no sign of a minimum: the damping grows to max_damping and the
+      // verdict is diverged, not converged on the unchanged state.
+      if (small && cost <= lin.cost + kCostRounding * std::abs(lin.cost)) {
         report.verdict = RefinementVerdict::kConverged;
         break;
       }

@@ -143,6 +143,13 @@ TEST(JointLoop, RefusedStepsLeaveTheStateAndEndDiverged) {
     EXPECT_EQ(r.report.rejected_steps, expected);
     EXPECT_GT(r.report.damping, params.max_damping);
     ASSERT_EQ(r.report.cost.size(), 1u);
+    // With the default tolerances the refused steps soon fall below them; a step refused by a
+    // NaN or far higher cost is still no minimum (it used to end `converged` on the start).
+    QuadraticProblem again(well_conditioned(), optimum(), Vector6d::Zero());
+    again.scripted_cost = cost;
+    const RefinementResult d = run(again, JointParams{});
+    EXPECT_EQ(d.report.verdict, RefinementVerdict::kDiverged);
+    EXPECT_EQ(d.report.rejected_steps, expected);
   }
 }
 
