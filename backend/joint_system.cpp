@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <Eigen/Cholesky>
 
@@ -136,6 +138,11 @@ JointSystem::JointSystem(const std::vector<VertexMap>& frames, const CameraIntri
                          const NeighbourhoodPattern& pattern, const JointTermParams& params,
                          JointSampling sampling)
     : pattern_(pattern.offsets), params_(params), sampling_(sampling) {
+  // The per-pixel kernels hold at most kMaxWindowFrames frames; more would be left out of the
+  // sums while the reduced system still counts their poses (singular S).
+  if (frames.size() < 2 || frames.size() > static_cast<std::size_t>(kMaxWindowFrames))
+    throw std::invalid_argument("JointSystem: " + std::to_string(frames.size()) +
+                                " frames; a window holds 2 to " + std::to_string(kMaxWindowFrames));
   for (const VertexMap& f : frames)
     views_.push_back(VertexView{f.data(), f.width(), f.height()});
   camera_ = PinholeProjection{camera.fx, camera.fy, camera.cx, camera.cy};

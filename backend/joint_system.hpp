@@ -73,6 +73,7 @@ enum class JointSampling { kGathered, kGatheredDouble, kReference };
 class JointSystem {
  public:
   /// frames[0] is the reference; all frames share `camera` (sizes are checked by the caller).
+  /// Throws std::invalid_argument unless 2 ≤ frames.size() ≤ kMaxWindowFrames.
   JointSystem(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
               const NeighbourhoodPattern& pattern, const JointTermParams& params,
               JointSampling sampling = JointSampling::kGathered);

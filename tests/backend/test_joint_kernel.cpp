@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <stdexcept>
 #include <string>
 #include <utility>
 #include <vector>
@@ -536,6 +537,20 @@ TEST_P(DampedStep, LowersTheCostAtEveryLinearisation) {
 }
 
 INSTANTIATE_TEST_SUITE_P(FixedAndEstimatedQuadrics, DampedStep, ::testing::Values(false, true));
+
+// The kernels hold at most kMaxWindowFrames frames: a 17th was left out of the sums while the
+// reduced system counted its pose (singular S; a review's finding for direct callers, whom
+// check_joint_inputs does not guard). Refused, and so is a window without a second frame.
+TEST(JointSystem, AWindowOutsideTwoToSixteenFramesIsRefused) {
+  const JointTestWindow w = render_window(2, 40);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  const JointTermParams p = JointParams{}.terms(true);
+  const std::vector<VertexMap> one(1, w.vertices[0]), most(kMaxWindowFrames, w.vertices[0]),
+      too_many(kMaxWindowFrames + 1, w.vertices[0]);
+  EXPECT_THROW(JointSystem(one, w.camera, pattern, p), std::invalid_argument);
+  EXPECT_NO_THROW(JointSystem(most, w.camera, pattern, p));
+  EXPECT_THROW(JointSystem(too_many, w.camera, pattern, p), std::invalid_argument);
+}
 
 // A vertex with x or y not finite (a caller's map; maps from depth mark a missing pixel with
 // NaN in all three) is no sample, as in Quad IT: with NaN x at every 7th pixel of frame 2 the
