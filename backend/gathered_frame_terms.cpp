@@ -154,7 +154,7 @@ double GatheredFrameTerms<Lane>::held_cost(const Quadricd& q, const Quadricd& q_
   Lane* held = sample(3);
   for (int k = 0; k < gathered_; ++k) {
     const Eigen::Vector3d X = T_weight.apply(Eigen::Vector3d(qx[k], qy[k], qz[k]));
-    const double r = std::clamp(quadric_residual(q_weight, X), -limits.gate, limits.gate);
+    const double r = gated(quadric_residual(q_weight, X), limits);
     held[k] = static_cast<Lane>((X - q.center).squaredNorm() + r * r);
   }
   const QuadricScalars<Lane> qs = QuadricScalars<Lane>::from(q.cast<Lane>());
