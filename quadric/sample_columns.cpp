@@ -23,7 +23,7 @@ inline void gate_sample(Lane r, Lane d2, Lane mask, Lane gate, Lane n0, Lane& in
 }
 
 // The same cost share with the weight held: `held` is r_h² + d² of the weight at the
-// linearisation (GatheredFrameTerms::hold_weights_at), so w = n₀² / (n₀² + held).
+// linearisation (GatheredFrameTerms::held_cost), so w = n₀² / (n₀² + held).
 template <typename Lane>
 inline void held_sample(Lane r, Lane held, Lane mask, Lane gate, Lane n0, Lane& inside,
                         Lane& gated_cost) {
