@@ -33,6 +33,29 @@ JPCR_SIMD_CLONES void centre_samples(const double* R, const double* o, int n, co
   }
 }
 
+// r_h² + d² of each of the n gathered points Q for the weight held at quadric w and pose (R, t)
+// (frame_cost): X − p̄_w = R Q + o with o = t − p̄_w, r_h = gated r(X; w), d² = |X − p̄|² with
+// X − p̄ = (X − p̄_w) + shift, shift = p̄_w − p̄. Branch-free, so it vectorises like centre_samples.
+template <typename Lane>
+JPCR_SIMD_CLONES void held_weight_terms(const double* R, const double* o, const double* shift,
+                                        const QuadricScalars<double>& w, double gate, int n,
+                                        const float* qx, const float* qy, const float* qz,
+                                        Lane* __restrict held) {
+  for (int k = 0; k < n; ++k) {
+    const double x = qx[k], y = qy[k], z = qz[k];
+    const double ex = R[0] * x + R[3] * y + R[6] * z + o[0];  // R is column-major
+    const double ey = R[1] * x + R[4] * y + R[7] * z + o[1];
+    const double ez = R[2] * x + R[5] * y + R[8] * z + o[2];
+    const double vx = w.r00 * ex + w.r01 * ey + w.r02 * ez;  // v = R_w (X − p̄_w)
+    const double vy = w.r10 * ex + w.r11 * ey + w.r12 * ez;
+    const double vz = w.r20 * ex + w.r21 * ey + w.r22 * ez + w.t_z;
+    const double r = 0.5 * (w.a * vx * vx + 2.0 * w.b * vx * vy + w.c * vy * vy) - vz;
+    const double r_h = r <= gate && r >= -gate ? r : gate;  // gated()
+    const double fx = ex + shift[0], fy = ey + shift[1], fz = ez + shift[2];
+    held[k] = static_cast<Lane>(fx * fx + fy * fy + fz * fz + r_h * r_h);
+  }
+}
+
 }  // namespace
 
 template <typename Lane>
@@ -152,11 +175,10 @@ double GatheredFrameTerms<Lane>::held_cost(const Quadricd& q, const Quadricd& q_
   // Each sample's r_h² + d² at (q_weight, T_weight) replaces its d² (frame_cost).
   const float *qx = raw_.data(), *qy = qx + capacity_, *qz = qy + capacity_;
   Lane* held = sample(3);
-  for (int k = 0; k < gathered_; ++k) {
-    const Eigen::Vector3d X = T_weight.apply(Eigen::Vector3d(qx[k], qy[k], qz[k]));
-    const double r = gated(quadric_residual(q_weight, X), limits);
-    held[k] = static_cast<Lane>((X - q.center).squaredNorm() + r * r);
-  }
+  const Eigen::Vector3d offset = T_weight.t - q_weight.center, shift = q_weight.center - q.center;
+  held_weight_terms(T_weight.R.data(), offset.data(), shift.data(),
+                    QuadricScalars<double>::from(q_weight), limits.gate, gathered_, qx, qy, qz,
+                    held);
   const QuadricScalars<Lane> qs = QuadricScalars<Lane>::from(q.cast<Lane>());
   const SampleCosts costs =
       held_sample_costs<Lane>(qs, {sample(0), sample(1), sample(2), held, sample(4), n_},
