@@ -15,6 +15,18 @@ namespace {
 constexpr int kLocalColumn[6] = {kColGx, kColGy, kColOne, kColJ0, kColJ1, kColM};
 constexpr double kLocalSign[6] = {1, 1, -1, 1, 1, 1};
 
+// R Q + o for a column-major R and the gathered point k, in double (inlined into the loops
+// below, which stay branch-free so that they vectorise).
+struct Moved {
+  double x, y, z;
+};
+inline Moved moved(const double* R, const double* o, const float* qx, const float* qy,
+                   const float* qz, int k) {
+  const double x = qx[k], y = qy[k], z = qz[k];
+  return {R[0] * x + R[3] * y + R[6] * z + o[0], R[1] * x + R[4] * y + R[7] * z + o[1],
+          R[2] * x + R[5] * y + R[8] * z + o[2]};
+}
+
 // d = R Q + o and |d|² for the n gathered points, in double, stored as lanes.
 template <typename Lane>
 JPCR_SIMD_CLONES void centre_samples(const double* R, const double* o, int n, const float* qx,
@@ -22,14 +34,11 @@ JPCR_SIMD_CLONES void centre_samples(const double* R, const double* o, int n, co
                                      Lane* __restrict dy, Lane* __restrict dz,
                                      Lane* __restrict d2) {
   for (int k = 0; k < n; ++k) {
-    const double x = qx[k], y = qy[k], z = qz[k];
-    const double ex = R[0] * x + R[3] * y + R[6] * z + o[0];  // R is column-major
-    const double ey = R[1] * x + R[4] * y + R[7] * z + o[1];
-    const double ez = R[2] * x + R[5] * y + R[8] * z + o[2];
-    dx[k] = static_cast<Lane>(ex);
-    dy[k] = static_cast<Lane>(ey);
-    dz[k] = static_cast<Lane>(ez);
-    d2[k] = static_cast<Lane>(ex * ex + ey * ey + ez * ez);
+    const Moved e = moved(R, o, qx, qy, qz, k);
+    dx[k] = static_cast<Lane>(e.x);
+    dy[k] = static_cast<Lane>(e.y);
+    dz[k] = static_cast<Lane>(e.z);
+    d2[k] = static_cast<Lane>(e.x * e.x + e.y * e.y + e.z * e.z);
   }
 }
 
@@ -42,16 +51,13 @@ JPCR_SIMD_CLONES void held_weight_terms(const double* R, const double* o, const 
                                         const float* qx, const float* qy, const float* qz,
                                         Lane* __restrict held) {
   for (int k = 0; k < n; ++k) {
-    const double x = qx[k], y = qy[k], z = qz[k];
-    const double ex = R[0] * x + R[3] * y + R[6] * z + o[0];  // R is column-major
-    const double ey = R[1] * x + R[4] * y + R[7] * z + o[1];
-    const double ez = R[2] * x + R[5] * y + R[8] * z + o[2];
-    const double vx = w.r00 * ex + w.r01 * ey + w.r02 * ez;  // v = R_w (X − p̄_w)
-    const double vy = w.r10 * ex + w.r11 * ey + w.r12 * ez;
-    const double vz = w.r20 * ex + w.r21 * ey + w.r22 * ez + w.t_z;
+    const Moved e = moved(R, o, qx, qy, qz, k);                 // X − p̄_w
+    const double vx = w.r00 * e.x + w.r01 * e.y + w.r02 * e.z;  // v = R_w (X − p̄_w)
+    const double vy = w.r10 * e.x + w.r11 * e.y + w.r12 * e.z;
+    const double vz = w.r20 * e.x + w.r21 * e.y + w.r22 * e.z + w.t_z;
     const double r = 0.5 * (w.a * vx * vx + 2.0 * w.b * vx * vy + w.c * vy * vy) - vz;
     const double r_h = r <= gate && r >= -gate ? r : gate;  // gated()
-    const double fx = ex + shift[0], fy = ey + shift[1], fz = ez + shift[2];
+    const double fx = e.x + shift[0], fy = e.y + shift[1], fz = e.z + shift[2];
     held[k] = static_cast<Lane>(fx * fx + fy * fy + fz * fz + r_h * r_h);
   }
 }
