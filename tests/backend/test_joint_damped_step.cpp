@@ -27,8 +27,9 @@ using test::render_window;
 // every damping up to 2e3 (a review's reproducer). Measured here with that weight: from the 13th
 // linearisation on, the damped step raised the cost by 3e-11 to 3e-10 of 0.627 (J-ftf's damped
 // steps lowered it either way, so it is not a case here). Through the Levenberg-Marquardt loop's
-// own sequence of linearisations, 16 of them: 2–4 s, 217 s under AddressSanitizer, hence its own
-// target, labelled slow.
+// own sequence of linearisations, 16 of them: 2–4 s, 217 s under AddressSanitizer when the
+// fuzzing build still put coverage into every source (before e6816d8), hence its own target,
+// labelled slow.
 TEST(DampedStep, LowersQFullsCostAtEveryLinearisation) {
   const JointTestWindow w = render_window(2, 160, "range:0.5", 3);
   JointParams params;
