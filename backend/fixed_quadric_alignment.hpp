@@ -1,7 +1,8 @@
 // Q-full (method.md §8): the poses T_2 … T_M of a window aligned to the quadrics of the reference
-// frame, which stay fixed (Quad IT). No residual couples two poses, so the reduced system is
-// block-diagonal and each pose is an independent 6x6 problem; it runs the loop of J-full
-// (refine_window) without the quadric unknowns.
+// frame, which stay fixed (Quad IT). No residual couples two poses, so each pose is an
+// independent 6x6 problem: each runs the loop of J-full (refine_window) alone, without the
+// quadric unknowns, with its own damping, step test and verdict (RefinementReport::
+// pose_verdicts), and the result puts them side by side (block-diagonal covariance).
 #pragma once
 
 #include "jpcr/backend/refiner.hpp"

@@ -35,11 +35,18 @@ RefinementResult failed(const Refiner& refiner, const std::string& why) {
   return r;
 }
 
+// Whether any pose after the gauge may be used (Q-full's poses each have their own verdict).
+bool any_pose_usable(const RefinementResult& r) {
+  for (std::size_t j = 1; j < r.poses.size(); ++j)
+    if (r.report.pose_usable(j)) return true;
+  return usable(r);
+}
+
 // A refiner that throws (out of memory, a device error) gives a failed refinement that says why,
 // so that the run goes on with the front end's motion as after any other failed refinement. So
 // does a refiner (a library caller's, through RefinerFactory) that says it converged but gives
-// another number of poses than frames, or one that is no rigid motion: its report would say
-// "converged" of poses the pipeline cannot use.
+// another number of poses (or of per-pose verdicts) than frames, or a usable pose that is no
+// rigid motion: its report would say "converged" of poses the pipeline cannot use.
 RefinementResult refine_or_report(const Refiner& refiner, const std::vector<Frame>& frames,
                                   const std::vector<Eigen::Isometry3d>& initial) {
   RefinementResult r;
@@ -50,12 +57,16 @@ RefinementResult refine_or_report(const Refiner& refiner, const std::vector<Fram
   } catch (...) {
     return failed(refiner, "the refiner threw an exception that is no std::exception");
   }
-  if (!usable(r.report.verdict)) return r;
+  if (!any_pose_usable(r)) return r;
   if (r.poses.size() != frames.size())
     return failed(refiner, "the refiner gave " + std::to_string(r.poses.size()) + " poses for " +
                                std::to_string(frames.size()) + " frames");
+  const std::size_t verdicts = r.report.pose_verdicts.size();
+  if (verdicts != 0 && verdicts + 1 != frames.size())
+    return failed(refiner, "the refiner gave " + std::to_string(verdicts) + " pose verdicts for " +
+                               std::to_string(frames.size() - 1) + " poses");
   for (std::size_t j = 0; j < r.poses.size(); ++j)
-    if (!is_rigid(r.poses[j]))
+    if ((j == 0 || r.report.pose_usable(j)) && !is_rigid(r.poses[j]))
       return failed(refiner, "the refiner's pose " + std::to_string(j) + " is no rigid motion");
   return r;
 }
@@ -314,7 +325,7 @@ void PipelineBackEnd::refine_window() {
   const Eigen::Isometry3d anchor = first.refined.pose;
   for (std::size_t j = 1; j < n; ++j) {
     PipelineKeyframe& k = keyframe_at(window_->keyframes[j]);
-    if (usable(r)) {
+    if (r.report.pose_usable(j)) {  // Q-full: each pose by its own verdict
       // Keyframe poses are chains of compositions, and each window composes its first pose with
       // the poses relative to it: without orthonormalizing, the rotations' error doubled every
       // window (se3.hpp).
@@ -427,11 +438,17 @@ FrameVerdicts PipelineBackEnd::verdicts(std::size_t index) const {
   // The gauge keyframe is never refined; any other was last refined by the window it ends, or
   // else by the window of the first later keyframe that ends one (windows share end frames).
   if (f.keyframe == 0 || !window_refiner_) return v;
-  for (std::size_t j = f.keyframe; j < keyframe_count(); ++j)
-    if (keyframe(j).window) {
-      v.window = keyframe(j).window->verdict;
-      break;
-    }
+  for (std::size_t j = f.keyframe; j < keyframe_count(); ++j) {
+    const std::optional<RefinementReport>& w = keyframe(j).window;
+    if (!w) continue;
+    v.window = w->verdict;
+    // Q-full: the keyframe's own pose verdict; the window's last keyframe is pose T_M, the
+    // last one.
+    const std::size_t back = j - static_cast<std::size_t>(f.keyframe);
+    if (back < w->pose_verdicts.size())
+      v.window = w->pose_verdicts[w->pose_verdicts.size() - 1 - back];
+    break;
+  }
   return v;
 }
 

@@ -121,8 +121,9 @@ struct FrameVerdicts {
   /// J-ftf of the frame's keyframe against the previous keyframe; absent for the first keyframe
   /// and for methods without J-ftf.
   std::optional<RefinementVerdict> pair;
-  /// J-full / Q-full of the window that refined the frame's keyframe last; absent for the first
-  /// keyframe (the gauge), before its window ran and for methods without windows.
+  /// J-full / Q-full of the window that refined the frame's keyframe last (Q-full: the verdict of
+  /// the keyframe's own pose, RefinementReport::pose_verdicts); absent for the first keyframe
+  /// (the gauge), before its window ran and for methods without windows.
   std::optional<RefinementVerdict> window;
 
   /// The front end is ok and every refinement that ran converged or hit max_iterations (the

@@ -21,6 +21,11 @@ bool usable(RefinementVerdict verdict) {
   return verdict == RefinementVerdict::kConverged || verdict == RefinementVerdict::kMaxIterations;
 }
 
+bool RefinementReport::pose_usable(std::size_t j) const {
+  if (pose_verdicts.empty()) return usable(verdict);
+  return j >= 1 && j <= pose_verdicts.size() && usable(pose_verdicts[j - 1]);
+}
+
 PoseSpread pose_spread(const Matrix6d& covariance, const Eigen::Isometry3d& pose) {
   Eigen::Matrix<double, 3, 6> J;  // δt = [I, −[t]×] ξ
   J.leftCols<3>().setIdentity();
@@ -106,17 +111,6 @@ RefinementResult JointFrameToFrame::refine(const std::vector<VertexMap>& vertice
                                            const QuadricMap& initial_quadrics) const {
   if (vertices.size() != 2) throw std::invalid_argument("j-ftf: needs exactly two frames");
   return refine_window(vertices, camera, initial_poses, initial_quadrics, params_, true, name());
-}
-
-FixedQuadricAlignment::FixedQuadricAlignment(const JointParams& params) : params_(params) {
-  params_.validate();
-}
-
-RefinementResult FixedQuadricAlignment::refine(const std::vector<VertexMap>& vertices,
-                                               const CameraIntrinsics& camera,
-                                               const std::vector<Eigen::Isometry3d>& initial_poses,
-                                               const QuadricMap& initial_quadrics) const {
-  return refine_window(vertices, camera, initial_poses, initial_quadrics, params_, false, name());
 }
 
 std::unique_ptr<Refiner> make_refiner(const std::string& name, const JointParams& params,

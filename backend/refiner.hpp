@@ -50,6 +50,11 @@ struct RefinementReport {
                                // that fell back to the CPU after a GPU failure says "cpu");
                                // empty where the refiner threw (kError)
   RefinementVerdict verdict = RefinementVerdict::kDiverged;
+  /// Q-full, whose poses are independent problems (method.md §8): each pose's own verdict, T_2 …
+  /// T_M; `verdict` is then usable only when all of these are, and the poses whose own verdict
+  /// is usable may be used even when it is not. Empty for the joint refiners, whose one verdict
+  /// covers every pose.
+  std::vector<RefinementVerdict> pose_verdicts;
   std::string error;               // kError: what the refiner threw; empty otherwise
   int iterations = 0;              // accepted steps
   int rejected_steps = 0;          // steps that raised the cost (then damped and retried)
@@ -87,6 +92,9 @@ struct RefinementReport {
   std::vector<double> step_translation_sd, step_rotation_sd;
 
   bool converged() const { return verdict == RefinementVerdict::kConverged; }
+  /// Whether pose T_{j+1} (j = 1 … M−1, the index into RefinementResult::poses) may be used: its
+  /// own verdict where there is one (pose_verdicts), else the refinement's.
+  bool pose_usable(std::size_t j) const;
 };
 
 struct RefinementResult {

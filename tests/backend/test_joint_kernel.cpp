@@ -423,9 +423,7 @@ JointState quadric_state(const QuadricMap& map, const std::vector<Eigen::Isometr
 // (quadric, frame) pair it counted, at the pixel it was associated to there, with the frame-1
 // terms of the estimated quadrics. At a zero step (quadrics included) the candidate's cost is the
 // linearisation's (to the rounding of the candidate pose's re-orthonormalisation): this checks
-// the pairs' bookkeeping (a seen bit on the wrong frame drops or adds terms). That the pairs stay
-// fixed over a step is what FixedQuadricAlignment.AWindowEndsWhereEachPoseEndsAlone
-// (test_joint_refinement.cpp) checks.
+// the pairs' bookkeeping (a seen bit on the wrong frame drops or adds terms).
 struct StepTestCase {
   int frames;
   bool estimate_quadrics;

@@ -98,11 +98,21 @@ class RecordingRefiner : public WrappingRefiner {
 
 // Fails the calls (counted from 0) listed in `fails`: with a failed verdict and the initial
 // poses, or by throwing as a refiner out of memory or device does; or (a library caller's broken
-// refiner) says it converged with one pose too few, or with a pose that is not finite, or throws
-// what is no std::exception.
+// refiner) says it converged with one pose too few, or with a pose that is not finite, or with
+// one per-pose verdict too many, or throws what is no std::exception; or, as Q-full whose poses
+// are independent, fails only the window's first or last pose (RefinementReport::pose_verdicts).
 class FailingRefiner : public WrappingRefiner {
  public:
-  enum class How { kVerdict, kThrow, kThrowOther, kTooFewPoses, kNanPose };
+  enum class How {
+    kVerdict,
+    kThrow,
+    kThrowOther,
+    kTooFewPoses,
+    kNanPose,
+    kTooManyPoseVerdicts,
+    kFirstPoseFails,
+    kLastPoseFails
+  };
   FailingRefiner(std::unique_ptr<Refiner> inner, std::vector<int> fails, How how)
       : WrappingRefiner(std::move(inner)), fails_(std::move(fails)), how_(how) {}
   RefinementResult refine(const std::vector<Frame>& frames,
@@ -111,14 +121,24 @@ class FailingRefiner : public WrappingRefiner {
       return WrappingRefiner::refine(frames, initial);
     if (how_ == How::kThrow) throw std::runtime_error("device lost");
     if (how_ == How::kThrowOther) throw 42;
+    if (how_ == How::kFirstPoseFails || how_ == How::kLastPoseFails) {
+      RefinementResult r = WrappingRefiner::refine(frames, initial);
+      const std::size_t bad = how_ == How::kFirstPoseFails ? 1 : r.poses.size() - 1;
+      r.report.pose_verdicts.assign(r.poses.size() - 1, RefinementVerdict::kConverged);
+      r.report.pose_verdicts[bad - 1] = r.report.verdict = RefinementVerdict::kTooFewQuadrics;
+      r.poses[bad] = initial[bad];
+      return r;
+    }
     RefinementResult r;
     r.report.method = name();
     r.report.verdict = RefinementVerdict::kDiverged;
     r.poses = initial;
-    if (how_ == How::kTooFewPoses || how_ == How::kNanPose) {
+    if (how_ == How::kTooFewPoses || how_ == How::kNanPose || how_ == How::kTooManyPoseVerdicts) {
       r = WrappingRefiner::refine(frames, initial);
       if (how_ == How::kTooFewPoses) r.poses.pop_back();
       if (how_ == How::kNanPose) r.poses.back().translation().x() = std::nan("");
+      if (how_ == How::kTooManyPoseVerdicts)
+        r.report.pose_verdicts.assign(r.poses.size(), RefinementVerdict::kConverged);
     }
     return r;
   }
@@ -407,6 +427,7 @@ TEST(PipelineHistory, ARefinerWhosePosesCannotBeUsedIsAFailedRefinement) {
   for (const auto& [how, why] :
        {std::pair{How::kTooFewPoses, "the refiner gave 1 poses for 2 frames"},
         std::pair{How::kNanPose, "the refiner's pose 1 is no rigid motion"},
+        std::pair{How::kTooManyPoseVerdicts, "the refiner gave 2 pose verdicts for 1 poses"},
         std::pair{How::kThrowOther, "an exception that is no std::exception"}}) {
     PipelineParams p;
     p.method = PipelineMethod::kJointFtf;
@@ -425,6 +446,42 @@ TEST(PipelineHistory, ARefinerWhosePosesCannotBeUsedIsAFailedRefinement) {
     EXPECT_NEAR(correction(back_end, 3).x(), 1e-3, 1e-12) << why;  // the next pair as usual
     for (std::size_t i = 0; i < 4; ++i)
       EXPECT_TRUE(back_end.refined_pose(i).pose.matrix().allFinite()) << why << ", frame " << i;
+  }
+}
+
+// Q-full's poses are independent problems, each with its own verdict: a window whose first or
+// last pose failed (too_few_quadrics) still moves the other keyframes, and only the failed one
+// keeps the front end's motion from the window's first keyframe and is not trusted.
+TEST(PipelineHistory, AQFullPoseThatFailsFailsAlone) {
+  using How = FailingRefiner::How;
+  for (const How how : {How::kFirstPoseFails, How::kLastPoseFails}) {
+    const std::size_t bad = how == How::kFirstPoseFails ? 1 : 2;
+    const std::size_t good = 3 - bad;
+    PipelineParams p;
+    p.method = PipelineMethod::kFixedQuadrics;
+    p.window = 3;
+    PipelineBackEnd back_end(p, CurvatureSink{}, failing({}, {0}, how));
+    const Frame keyframe;
+    for (int k = 0; k < 3; ++k)
+      back_end.add(walk_frame(k), &keyframe);
+    back_end.finish();
+    const PipelineKeyframe& window = back_end.keyframe(2);
+    ASSERT_TRUE(window.window.has_value()) << bad;
+    EXPECT_EQ(window.window->verdict, RefinementVerdict::kTooFewQuadrics) << bad;
+    // The stand-in window refiner moves pose j by j (0, 2, -1) mm from the front end's.
+    const Eigen::Vector3d moved = (back_end.keyframe(good).refined.pose.translation() -
+                                   back_end.keyframe(good).front_end.pose.translation()) /
+                                  static_cast<double>(good);
+    EXPECT_LT((moved - Eigen::Vector3d(0.0, 2e-3, -1e-3)).norm(), 1e-12) << bad;
+    EXPECT_FALSE(back_end.keyframe(good).used_front_end) << bad;
+    EXPECT_EQ(back_end.verdicts(good).window, RefinementVerdict::kConverged) << bad;
+    EXPECT_TRUE(back_end.verdicts(good).trusted()) << bad;
+    EXPECT_TRUE(
+        back_end.keyframe(bad).refined.pose.isApprox(back_end.keyframe(bad).front_end.pose, 1e-12))
+        << bad;
+    EXPECT_TRUE(back_end.keyframe(bad).used_front_end) << bad;
+    EXPECT_EQ(back_end.verdicts(bad).window, RefinementVerdict::kTooFewQuadrics) << bad;
+    EXPECT_FALSE(back_end.verdicts(bad).trusted()) << bad;
   }
 }
 

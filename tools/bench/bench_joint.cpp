@@ -4,6 +4,10 @@
 // reference 129-sample pattern scaled to the width, Quad IT quadrics on the reference frame,
 // poses 1 cm / 1° off the truth. Arguments: image width (height 3/4 of it), frames M. The
 // buffers of the reduced system and the step are reused from one iteration to the next.
+#include <algorithm>
+#include <memory>
+#include <vector>
+
 #include <benchmark/benchmark.h>
 
 #include "joint_bench_window.hpp"
@@ -11,25 +15,56 @@
 
 namespace {
 
+// One joint problem and the buffers the refinement loop keeps across its iterations
+// (run_joint_refinement). The system sees the frames it holds.
+struct Problem {
+  Problem(std::vector<jpcr::VertexMap> vertices, const jpcr::CameraIntrinsics& camera,
+          const jpcr::NeighbourhoodPattern& pattern, const jpcr::JointTermParams& terms,
+          jpcr::JointSampling sampling, jpcr::JointState start)
+      : frames(std::move(vertices)),
+        system(frames, camera, pattern, terms, sampling),
+        state(std::move(start)) {}
+  std::vector<jpcr::VertexMap> frames;
+  jpcr::JointSystem system;
+  jpcr::JointState state;
+  jpcr::ReducedSystem lin;
+  jpcr::JointStep step;
+  std::vector<jpcr::Vector6d> steps;
+};
+
+// estimate_quadrics = true: one problem over the window (J-ftf, J-full). false: Q-full, whose
+// poses are independent problems (fixed_quadric_alignment.hpp), each the reference frame and
+// one other; an iteration is one of each.
 void run(benchmark::State& state, bool estimate_quadrics,
          jpcr::JointSampling sampling = jpcr::JointSampling::kGathered) {
   const jpcr::bench::JointBenchWindow w = jpcr::bench::make_joint_window(
       static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const jpcr::JointParams params;
   const jpcr::NeighbourhoodPattern pattern = params.quadric.pattern.for_width(w.camera.width);
-  const jpcr::JointSystem system(w.vertices, w.camera, pattern, params.terms(estimate_quadrics),
-                                 sampling);
+  const jpcr::JointTermParams terms = params.terms(estimate_quadrics);
+  std::vector<std::unique_ptr<Problem>> problems;
+  if (estimate_quadrics) {
+    problems.push_back(
+        std::make_unique<Problem>(w.vertices, w.camera, pattern, terms, sampling, w.state));
+  } else {
+    for (std::size_t j = 1; j < w.vertices.size(); ++j) {
+      jpcr::JointState alone = w.state;
+      alone.poses = {w.state.poses[0], w.state.poses[j]};
+      problems.push_back(
+          std::make_unique<Problem>(std::vector<jpcr::VertexMap>{w.vertices[0], w.vertices[j]},
+                                    w.camera, pattern, terms, sampling, std::move(alone)));
+    }
+  }
   int active = 0;
-  // Kept across iterations as the refinement loop keeps them (run_joint_refinement).
-  jpcr::ReducedSystem lin;
-  jpcr::JointStep step;
-  std::vector<jpcr::Vector6d> steps;
   const auto iteration = [&] {
-    system.linearize(w.state, params.initial_damping, lin);
-    if (!jpcr::JointSystem::solve_poses(lin, params.initial_damping, steps)) return false;
-    system.step(w.state, lin, params.initial_damping, steps, step);
-    benchmark::DoNotOptimize(step.cost);
-    active = lin.active;
+    for (const std::unique_ptr<Problem>& problem : problems) {
+      Problem& p = *problem;
+      p.system.linearize(p.state, params.initial_damping, p.lin);
+      if (!jpcr::JointSystem::solve_poses(p.lin, params.initial_damping, p.steps)) return false;
+      p.system.step(p.state, p.lin, params.initial_damping, p.steps, p.step);
+      benchmark::DoNotOptimize(p.step.cost);
+      active = std::max(active, p.lin.active);
+    }
     return true;
   };
   // One untimed iteration first: the buffers' first use (page faults of the ~90 MB of factors at

@@ -25,8 +25,14 @@ void write_refinement(JsonWriter& json, const char* name,
     json.null();  // the refiner threw (verdict "error")
   else
     json.value(r->device);
-  json.field("verdict", to_string(r->verdict))
-      .field("iterations", r->iterations)
+  json.field("verdict", to_string(r->verdict));
+  if (!r->pose_verdicts.empty()) {  // q-full: each pose's own, T_2 … T_M
+    json.key("pose_verdicts").begin_array();
+    for (RefinementVerdict v : r->pose_verdicts)
+      json.value(to_string(v));
+    json.end_array();
+  }
+  json.field("iterations", r->iterations)
       .field("rejected_steps", r->rejected_steps)
       .field("cost", r->cost)
       .field("active_quadrics", r->active_quadrics)
