@@ -57,14 +57,15 @@ RefinementResult refine_or_report(const Refiner& refiner, const std::vector<Fram
   } catch (...) {
     return failed(refiner, "the refiner threw an exception that is no std::exception");
   }
-  if (!any_pose_usable(r)) return r;
+  const std::size_t verdicts = r.report.pose_verdicts.size();
+  if (verdicts == 0 && !usable(r)) return r;
   if (r.poses.size() != frames.size())
     return failed(refiner, "the refiner gave " + std::to_string(r.poses.size()) + " poses for " +
                                std::to_string(frames.size()) + " frames");
-  const std::size_t verdicts = r.report.pose_verdicts.size();
   if (verdicts != 0 && verdicts + 1 != frames.size())
     return failed(refiner, "the refiner gave " + std::to_string(verdicts) + " pose verdicts for " +
                                std::to_string(frames.size() - 1) + " poses");
+  if (!any_pose_usable(r)) return r;
   for (std::size_t j = 0; j < r.poses.size(); ++j)
     if ((j == 0 || r.report.pose_usable(j)) && !is_rigid(r.poses[j]))
       return failed(refiner, "the refiner's pose " + std::to_string(j) + " is no rigid motion");
@@ -325,14 +326,19 @@ void PipelineBackEnd::refine_window() {
   const Eigen::Isometry3d anchor = first.refined.pose;
   for (std::size_t j = 1; j < n; ++j) {
     PipelineKeyframe& k = keyframe_at(window_->keyframes[j]);
+    const PipelineKeyframe& previous = keyframe_at(window_->keyframes[j - 1]);
     if (r.report.pose_usable(j)) {  // Q-full: each pose by its own verdict
       // Keyframe poses are chains of compositions, and each window composes its first pose with
       // the poses relative to it: without orthonormalizing, the rotations' error doubled every
       // window (se3.hpp).
       k.refined.pose = orthonormalized(anchor * r.poses[j]);
       k.used_front_end = false;
-    } else if (!pair_refiner_) {
-      k.used_front_end = true;  // with J-ftf, its pose (or its failure) stands
+    } else if (!pair_refiner_) {  // with J-ftf, its pose (or its failure) stands
+      // The front end's motion from the previous keyframe, which a Q-full window may have moved
+      // (its poses are independent); as on_keyframe chains it, so unchanged where it did not.
+      k.refined.pose = orthonormalized(previous.refined.pose *
+                                       (previous.front_end.pose.inverse() * k.front_end.pose));
+      k.used_front_end = true;
     }
   }
   if (usable(r) && r.quadrics.width() > 0) {  // Q-full's are Quad IT's, and say so

@@ -53,7 +53,11 @@ struct RefinementReport {
   /// Q-full, whose poses are independent problems (method.md §8): each pose's own verdict, T_2 …
   /// T_M; `verdict` is then usable only when all of these are, and the poses whose own verdict
   /// is usable may be used even when it is not. Empty for the joint refiners, whose one verdict
-  /// covers every pose.
+  /// covers every pose. Q-full's other fields combine its pose problems': iterations the most of
+  /// any, rejected_steps, terms and cost summed (a pose that ended keeps its last cost),
+  /// active_quadrics the most any pose saw, residual_variance and sample_reuse pooled over all
+  /// terms (each pose's covariance block uses its own), degeneracy the least of any pose's,
+  /// damping the largest.
   std::vector<RefinementVerdict> pose_verdicts;
   std::string error;               // kError: what the refiner threw; empty otherwise
   int iterations = 0;              // accepted steps
@@ -107,7 +111,7 @@ struct RefinementResult {
   /// describes the spread of the estimate under sensor noise, not its bias.
   std::vector<Matrix6d> covariance;
   /// All poses T_2 … T_M jointly, 6(M−1) square (its diagonal blocks are `covariance`); empty
-  /// when unknown.
+  /// when unknown (Q-full: block-diagonal, and empty when any pose's S is singular).
   Eigen::MatrixXd joint_covariance;
   RefinementReport report;
 };

@@ -99,8 +99,9 @@ class RecordingRefiner : public WrappingRefiner {
 // Fails the calls (counted from 0) listed in `fails`: with a failed verdict and the initial
 // poses, or by throwing as a refiner out of memory or device does; or (a library caller's broken
 // refiner) says it converged with one pose too few, or with a pose that is not finite, or with
-// one per-pose verdict too many, or throws what is no std::exception; or, as Q-full whose poses
-// are independent, fails only the window's first or last pose (RefinementReport::pose_verdicts).
+// one per-pose verdict too many, or with one pose too few and a usable verdict for it, or throws
+// what is no std::exception; or, as Q-full whose poses are independent, fails only the window's
+// first or last pose (RefinementReport::pose_verdicts).
 class FailingRefiner : public WrappingRefiner {
  public:
   enum class How {
@@ -111,7 +112,8 @@ class FailingRefiner : public WrappingRefiner {
     kNanPose,
     kTooManyPoseVerdicts,
     kFirstPoseFails,
-    kLastPoseFails
+    kLastPoseFails,
+    kPoseVerdictsBeyondThePoses
   };
   FailingRefiner(std::unique_ptr<Refiner> inner, std::vector<int> fails, How how)
       : WrappingRefiner(std::move(inner)), fails_(std::move(fails)), how_(how) {}
@@ -121,6 +123,13 @@ class FailingRefiner : public WrappingRefiner {
       return WrappingRefiner::refine(frames, initial);
     if (how_ == How::kThrow) throw std::runtime_error("device lost");
     if (how_ == How::kThrowOther) throw 42;
+    if (how_ == How::kPoseVerdictsBeyondThePoses) {  // the last pose missing, its verdict not
+      RefinementResult r = WrappingRefiner::refine(frames, initial);
+      r.poses.pop_back();
+      r.report.pose_verdicts.assign(frames.size() - 1, RefinementVerdict::kConverged);
+      r.report.pose_verdicts[0] = r.report.verdict = RefinementVerdict::kDiverged;
+      return r;
+    }
     if (how_ == How::kFirstPoseFails || how_ == How::kLastPoseFails) {
       RefinementResult r = WrappingRefiner::refine(frames, initial);
       const std::size_t bad = how_ == How::kFirstPoseFails ? 1 : r.poses.size() - 1;
@@ -450,39 +459,65 @@ TEST(PipelineHistory, ARefinerWhosePosesCannotBeUsedIsAFailedRefinement) {
 }
 
 // Q-full's poses are independent problems, each with its own verdict: a window whose first or
-// last pose failed (too_few_quadrics) still moves the other keyframes, and only the failed one
-// keeps the front end's motion from the window's first keyframe and is not trusted.
+// last pose failed (too_few_quadrics) still moves its other keyframes, and only the failed one
+// keeps the front end's motion from the previous keyframe and is not trusted. Six keyframes in
+// windows of 3: [0 1 2] refines, [2 3 4] fails its first or last pose, and the window finish()
+// refines, [4 5], fails its one pose.
 TEST(PipelineHistory, AQFullPoseThatFailsFailsAlone) {
   using How = FailingRefiner::How;
+  const Eigen::Vector3d offset(0.0, 2e-3, -1e-3);  // the stand-in window refiner's, per position
   for (const How how : {How::kFirstPoseFails, How::kLastPoseFails}) {
-    const std::size_t bad = how == How::kFirstPoseFails ? 1 : 2;
-    const std::size_t good = 3 - bad;
+    const bool first = how == How::kFirstPoseFails;
     PipelineParams p;
     p.method = PipelineMethod::kFixedQuadrics;
     p.window = 3;
-    PipelineBackEnd back_end(p, CurvatureSink{}, failing({}, {0}, how));
+    PipelineBackEnd back_end(p, CurvatureSink{}, failing({}, {1, 2}, how));
     const Frame keyframe;
-    for (int k = 0; k < 3; ++k)
+    for (int k = 0; k < 6; ++k)
       back_end.add(walk_frame(k), &keyframe);
     back_end.finish();
-    const PipelineKeyframe& window = back_end.keyframe(2);
-    ASSERT_TRUE(window.window.has_value()) << bad;
-    EXPECT_EQ(window.window->verdict, RefinementVerdict::kTooFewQuadrics) << bad;
-    // The stand-in window refiner moves pose j by j (0, 2, -1) mm from the front end's.
-    const Eigen::Vector3d moved = (back_end.keyframe(good).refined.pose.translation() -
-                                   back_end.keyframe(good).front_end.pose.translation()) /
-                                  static_cast<double>(good);
-    EXPECT_LT((moved - Eigen::Vector3d(0.0, 2e-3, -1e-3)).norm(), 1e-12) << bad;
-    EXPECT_FALSE(back_end.keyframe(good).used_front_end) << bad;
-    EXPECT_EQ(back_end.verdicts(good).window, RefinementVerdict::kConverged) << bad;
-    EXPECT_TRUE(back_end.verdicts(good).trusted()) << bad;
-    EXPECT_TRUE(
-        back_end.keyframe(bad).refined.pose.isApprox(back_end.keyframe(bad).front_end.pose, 1e-12))
-        << bad;
-    EXPECT_TRUE(back_end.keyframe(bad).used_front_end) << bad;
-    EXPECT_EQ(back_end.verdicts(bad).window, RefinementVerdict::kTooFewQuadrics) << bad;
-    EXPECT_FALSE(back_end.verdicts(bad).trusted()) << bad;
+    // The correction of each keyframe's motion from the previous one: position j in its window
+    // moves by j offsets from the window's first keyframe, a failed one by none from the previous.
+    const Eigen::Vector3d none = Eigen::Vector3d::Zero(), twice = 2.0 * offset;
+    const std::vector<Eigen::Vector3d> expected = {
+        none, offset, offset, first ? none : offset, first ? twice : none, none};
+    const std::size_t bad = first ? 3 : 4, good = first ? 4 : 3;
+    for (std::size_t k = 1; k < 6; ++k) {
+      const std::string at =
+          std::string(first ? "first" : "last") + ", keyframe " + std::to_string(k);
+      EXPECT_LT((correction(back_end, k) - expected[k]).norm(), 1e-12) << at;
+      const bool failed = k == bad || k == 5;
+      EXPECT_EQ(back_end.keyframe(k).used_front_end, failed) << at;
+      EXPECT_EQ(back_end.verdicts(k).window,
+                failed ? RefinementVerdict::kTooFewQuadrics : RefinementVerdict::kConverged)
+          << at;
+      EXPECT_EQ(back_end.verdicts(k).trusted(), !failed) << at;
+    }
+    EXPECT_EQ(back_end.keyframe(4).window->verdict, RefinementVerdict::kTooFewQuadrics);
+    EXPECT_EQ(back_end.keyframe(4).window->pose_verdicts.size(), 2u);
+    EXPECT_FALSE(back_end.keyframe(good).used_front_end);
   }
+}
+
+// A refiner's per-pose verdicts that name a usable pose it did not give are a failed refinement,
+// not a read past its poses.
+TEST(PipelineHistory, PoseVerdictsBeyondThePosesAreAFailedRefinement) {
+  PipelineParams p;
+  p.method = PipelineMethod::kFixedQuadrics;
+  p.window = 3;
+  PipelineBackEnd back_end(p, CurvatureSink{},
+                           failing({}, {0}, FailingRefiner::How::kPoseVerdictsBeyondThePoses));
+  const Frame keyframe;
+  for (int k = 0; k < 3; ++k)
+    back_end.add(walk_frame(k), &keyframe);
+  back_end.finish();
+  const PipelineKeyframe& last = back_end.keyframe(2);
+  ASSERT_TRUE(last.window.has_value());
+  EXPECT_EQ(last.window->verdict, RefinementVerdict::kError);
+  EXPECT_NE(last.window->error.find("the refiner gave 2 poses for 3 frames"), std::string::npos)
+      << last.window->error;
+  for (std::size_t k = 1; k < 3; ++k)
+    EXPECT_LT(correction(back_end, k).norm(), 1e-12) << k;
 }
 
 // A front-end pose that is no rigid motion (NaN) is refused before anything changes: each

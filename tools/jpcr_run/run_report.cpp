@@ -155,7 +155,8 @@ void write_report(std::ostream& out, const RunInputs& inputs, const KeyframePipe
   for (const PipelineFrame& f : p.frames())
     failed_tracking += f.kept_last_motion ? 1 : 0;
   for (const PipelineKeyframe& k : p.keyframes()) {
-    // The window's report sits on its last keyframe; every keyframe it covers shares its verdict.
+    // The window's report sits on its last keyframe; every keyframe it covers shares its verdict
+    // (Q-full: each has its own pose's).
     const FrameVerdicts v = p.verdicts(static_cast<std::size_t>(k.frame));
     failed_refinement += (v.pair && !usable(*v.pair)) || (v.window && !usable(*v.window)) ? 1 : 0;
     on_front_end += k.used_front_end ? 1 : 0;
