@@ -146,6 +146,7 @@ void read_quadric(YamlSection yaml, QuadricParams& p) {
   normals.read("half_window", p.normals.half_window);
   normals.read("min_points", p.normals.min_points);
   normals.read("max_depth_jump", p.normals.max_depth_jump);
+  normals.read("quadrant_ratio", p.normals.quadrant_ratio);
   normals.finish();
   validate_in(normals, p.normals);
   YamlSection fit = yaml.section("fit");

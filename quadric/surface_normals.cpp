@@ -23,6 +23,11 @@ struct Moments {
     for (int k = 0; k < 9; ++k)
       s[k] += o.s[k];
   }
+  /// Σ X and Σ X Xᵀ.
+  void to(Eigen::Vector3d& sum, Eigen::Matrix3d& outer) const {
+    sum = Eigen::Vector3d(s[0], s[1], s[2]);
+    outer << s[3], s[4], s[5], s[4], s[6], s[7], s[5], s[7], s[8];
+  }
 };
 
 // The plane fit of plane_normal, separably, for the pixels whose whole window is clean: inside
@@ -30,23 +35,27 @@ struct Moments {
 // left out (almost every pixel of a smooth surface). One row of column sums over the window's
 // 2h+1 rows, then 2h+1 of them per pixel: about a quarter of the additions. The same moments up
 // to rounding (uncentred here, so the scatter matrix loses about log10(|X|² / window²) digits of
-// the 16, far below the float normal); any other pixel takes plane_normal itself.
+// the 16, far below the float normal), and the same choice of a quadrant where the window holds
+// no single smooth surface (choose_quadrant); any other pixel takes plane_normal itself.
 class CleanWindows {
  public:
   CleanWindows(const VertexMap& vertices, const NormalEstimationParams& p)
       : vertices_(vertices),
         p_(p),
         columns_(vertices.width()),
+        upper_(vertices.width()),
+        lower_(vertices.width()),
         finite_(vertices.width()),
         z_min_(vertices.width()),
         z_max_(vertices.width()) {}
 
-  /// The column sums for the windows of row v; false when they leave the image.
+  /// The column sums for the windows of row v (and for their upper and lower h+1 rows, the
+  /// quadrants' columns); false when they leave the image.
   bool load_row(int v) {
     const int h = p_.half_window;
     if (v < h || v + h >= vertices_.height()) return false;
     for (int u = 0; u < vertices_.width(); ++u) {
-      Moments m;
+      Moments up, down;
       bool finite = true;
       float lo = vertices_(u, v - h).z(), hi = lo;
       for (int r = v - h; r <= v + h; ++r) {
@@ -54,8 +63,18 @@ class CleanWindows {
         finite = finite && is_sample_point(X);
         lo = std::min(lo, X.z());
         hi = std::max(hi, X.z());
-        m.add(X);
+        if (r < v) up.add(X);
+        if (r > v) down.add(X);
       }
+      Moments centre;
+      centre.add(vertices_(u, v));
+      Moments m = up;
+      m.add(down);
+      m.add(centre);
+      up.add(centre);
+      down.add(centre);
+      upper_[u] = up;
+      lower_[u] = down;
       columns_[u] = m;
       finite_[u] = finite ? 1 : 0;
       z_min_[u] = lo;
@@ -82,17 +101,30 @@ class CleanWindows {
     Moments m;
     for (int c = u - h; c <= u + h; ++c)
       m.add(columns_[c]);
-    const Eigen::Vector3d sum(m.s[0], m.s[1], m.s[2]);
+    Eigen::Vector3d sum;
     Eigen::Matrix3d outer;
-    outer << m.s[3], m.s[4], m.s[5], m.s[4], m.s[6], m.s[7], m.s[5], m.s[7], m.s[8];
-    n = plane_normal_from_moments(sum, outer, (2 * h + 1) * (2 * h + 1), centre, p_);
+    m.to(sum, outer);
+    double residual = 0.0;
+    n = plane_normal_from_moments(sum, outer, (2 * h + 1) * (2 * h + 1), centre, p_, &residual);
+    if (!may_take_a_quadrant(n, residual, p_)) return true;
+    QuadrantMoments quadrants;
+    for (int q = 0; q < 4; ++q) {
+      const std::vector<Moments>& band = (q & 2) ? lower_ : upper_;
+      const int c0 = (q & 1) ? u : u - h;
+      Moments mq;
+      for (int c = c0; c <= c0 + h; ++c)
+        mq.add(band[c]);
+      mq.to(quadrants.sum[q], quadrants.outer[q]);
+      quadrants.count[q] = (h + 1) * (h + 1);
+    }
+    n = choose_quadrant(quadrants, centre, p_, n, residual);
     return true;
   }
 
  private:
   const VertexMap& vertices_;
   const NormalEstimationParams& p_;
-  std::vector<Moments> columns_;
+  std::vector<Moments> columns_, upper_, lower_;  // rows v−h…v+h, v−h…v and v…v+h
   std::vector<unsigned char> finite_;
   std::vector<float> z_min_, z_max_;
 };
@@ -109,6 +141,8 @@ void NormalEstimationParams::validate() const {
                      std::to_string(half_window) + ")");
   if (!(max_depth_jump > 0.0f))
     throw InputError("max_depth_jump: must be positive (fraction of depth)");
+  if (!(quadrant_ratio == 0.0f || (quadrant_ratio >= 1.0f && quadrant_ratio <= 1e12f)))
+    throw InputError("quadrant_ratio: must be 0 (off) or in [1, 1e12]");
 }
 
 NormalMap estimate_normals(const VertexMap& vertices, const NormalEstimationParams& params) {

@@ -11,7 +11,12 @@ struct NormalEstimationParams {
   int min_points = 6;           // fewer valid window points → no normal
   float max_depth_jump = 0.1f;  // fraction of the centre's depth: window points whose depth
                                 // differs more are on another surface and left out of the plane
-  void validate() const;        // throws InputError "field: problem"
+  /// A quadrant of the window ((h+1)² pixels sharing the centre) whose plane residual is this many
+  /// times below the window's gives the normal instead: the window then holds no single smooth
+  /// surface (a depth step below max_depth_jump, a crease; plane_normal_kernel.hpp,
+  /// choose_quadrant). 0: always the window's plane (method.md §3 as written).
+  float quadrant_ratio = 100.0f;
+  void validate() const;  // throws InputError "field: problem"
 };
 
 /// One normal per pixel (camera frame, unit, n·X < 0); NaN where the centre has no vertex, too few

@@ -240,6 +240,7 @@ TEST(QuadricParamsYaml, DefaultYamlStatesTheBuiltInDefaults) {
   EXPECT_EQ(shipped.pattern.reference_width, built_in.pattern.reference_width);
   EXPECT_EQ(shipped.normals.half_window, built_in.normals.half_window);
   EXPECT_FLOAT_EQ(shipped.normals.max_depth_jump, built_in.normals.max_depth_jump);
+  EXPECT_FLOAT_EQ(shipped.normals.quadrant_ratio, built_in.normals.quadrant_ratio);
   EXPECT_EQ(shipped.fit.iterations, built_in.fit.iterations);
   EXPECT_FLOAT_EQ(shipped.fit.fair_n0, built_in.fit.fair_n0);
   EXPECT_FLOAT_EQ(shipped.fit.residual_gate, built_in.fit.residual_gate);
@@ -264,6 +265,13 @@ TEST(QuadricParamsYaml, BadValuesNameTheKey) {
               parse_params("quadric:\n  pattern:\n    radius: 6\n    strid: 3\n", "p.yaml");
             }).find("strid"),
             std::string::npos);
+  EXPECT_NE(test::input_error_of([] {
+              parse_params("quadric:\n  normals:\n    quadrant_ratio: 0.5\n", "p.yaml");
+            }).find("quadrant_ratio"),
+            std::string::npos);
+  EXPECT_FLOAT_EQ(parse_params("quadric:\n  normals:\n    quadrant_ratio: 0\n", "p.yaml")
+                      .quadric.normals.quadrant_ratio,
+                  0.0f);
 }
 
 }  // namespace
