@@ -15,16 +15,9 @@
 
 namespace jpcr {
 
-/// The eigenvector of the smallest eigenvalue of a symmetric 3x3 S and its eigenvalues,
-/// ascending: the eigenvalues in closed form (with q = tr S / 3, p² = |S − q I|²_F / 6 and
-/// r = det((S − q I) / p) / 2, φ = acos(r) / 3: λ_max = q + 2p cos φ, λ_min = q + 2p cos(φ + 2π/3),
-/// λ_mid = 3q − λ_min − λ_max), the eigenvector as the longest cross product of two rows of
-/// S − λ_min I, the other two eigenvectors being in their span. The method of Eigen's
-/// computeDirect for the one eigenvector a plane fit needs. False where S is a multiple of I
-/// or the cross products are at rounding level; at a double smallest eigenvalue (which this
-/// closed form splits by about √ε) the answer is some unit vector of that eigenvalue's plane.
-/// The eigenvalues of a symmetric 3x3 S, ascending, in the closed form above; false where S is a
-/// multiple of I.
+/// The eigenvalues of a symmetric 3x3 S, ascending, in closed form (with q = tr S / 3,
+/// p² = |S − q I|²_F / 6 and r = det((S − q I) / p) / 2, φ = acos(r) / 3: λ_max = q + 2p cos φ,
+/// λ_min = q + 2p cos(φ + 2π/3), λ_mid = 3q − λ_min − λ_max); false where S is a multiple of I.
 JPCR_HD bool closed_form_eigenvalues(const Eigen::Matrix3d& S, Eigen::Vector3d& eigenvalues) {
   const double q = (S(0, 0) + S(1, 1) + S(2, 2)) / 3.0;
   Eigen::Matrix3d B = S;
@@ -43,6 +36,13 @@ JPCR_HD bool closed_form_eigenvalues(const Eigen::Matrix3d& S, Eigen::Vector3d& 
   return true;
 }
 
+/// The eigenvector of the smallest eigenvalue of a symmetric 3x3 S and its eigenvalues,
+/// ascending: the eigenvalues in closed form (closed_form_eigenvalues), the eigenvector as the
+/// longest cross product of two rows of S − λ_min I, the other two eigenvectors being in their
+/// span. The method of Eigen's computeDirect for the one eigenvector a plane fit needs. False
+/// where S is a multiple of I or the cross products are at rounding level; at a double smallest
+/// eigenvalue (which this closed form splits by about √ε) the answer is some unit vector of that
+/// eigenvalue's plane.
 JPCR_HD bool smallest_eigenvector(const Eigen::Matrix3d& S, Eigen::Vector3d& n,
                                   Eigen::Vector3d& eigenvalues) {
   if (!closed_form_eigenvalues(S, eigenvalues)) return false;
