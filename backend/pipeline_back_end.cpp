@@ -35,11 +35,12 @@ RefinementResult failed(const Refiner& refiner, const std::string& why) {
   return r;
 }
 
-// Whether any pose after the gauge may be used (Q-full's poses each have their own verdict).
+// Whether any pose after the gauge may be used (Q-full's poses each have their own verdict). Its
+// caller has checked the poses' and the verdicts' counts.
 bool any_pose_usable(const RefinementResult& r) {
   for (std::size_t j = 1; j < r.poses.size(); ++j)
     if (r.report.pose_usable(j)) return true;
-  return usable(r);
+  return false;
 }
 
 // A refiner that throws (out of memory, a device error) gives a failed refinement that says why,
