@@ -44,6 +44,7 @@ RefinementResult combine(const std::vector<RefinementResult>& alone, const Quadr
     r.iterations = std::max(r.iterations, p.iterations);
     r.rejected_steps += p.rejected_steps;
     r.active_quadrics = std::max(r.active_quadrics, p.active_quadrics);
+    r.edge_quadrics = p.edge_quadrics;  // the same reference and flags in every pose problem
     r.seen.push_back(p.seen.empty() ? 0 : p.seen[0]);
     r.terms += p.terms;
     r.damping = std::max(r.damping, p.damping);
@@ -87,11 +88,12 @@ RefinementResult FixedQuadricAlignment::refine(const std::vector<VertexMap>& ver
                                                const std::vector<Eigen::Isometry3d>& initial_poses,
                                                const QuadricMap& initial_quadrics) const {
   check_joint_inputs(vertices, camera, initial_poses, initial_quadrics);
+  const std::vector<unsigned char> edges = edge_quadrics(vertices[0], params_);
   std::vector<RefinementResult> alone;
   for (std::size_t j = 1; j < vertices.size(); ++j)
     alone.push_back(refine_window({vertices[0], vertices[j]}, camera,
                                   {initial_poses[0], initial_poses[j]}, initial_quadrics, params_,
-                                  false, name()));
+                                  false, name(), &edges));
   return combine(alone, initial_quadrics, name());
 }
 

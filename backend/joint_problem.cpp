@@ -8,6 +8,7 @@
 #include <Eigen/Cholesky>
 
 #include "jpcr/quadric/se3.hpp"
+#include "jpcr/quadric/surface_normals.hpp"
 
 namespace jpcr {
 
@@ -119,6 +120,31 @@ void check_joint_inputs(const std::vector<VertexMap>& vertices, const CameraIntr
                                   " is not a rigid motion (finite, R orthonormal, det R = 1)");
   if (quadrics.width() != camera.width || quadrics.height() != camera.height)
     throw std::invalid_argument("joint refinement: the quadric map differs in size from frame 0");
+}
+
+std::vector<unsigned char> edge_quadrics(const VertexMap& reference, const JointParams& params) {
+  if (params.edge_tilt == 0.0f) return {};
+  Image<float> tilt;
+  estimate_normals(reference, params.quadric.normals, &tilt);
+  const float limit = params.edge_tilt * static_cast<float>(M_PI / 180.0);
+  std::vector<unsigned char> edges(tilt.size());
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    edges[i] = tilt[i] > limit ? 1 : 0;
+  return edges;
+}
+
+int leave_out(const std::vector<unsigned char>& edges, JointState& state) {
+  if (edges.empty()) return 0;
+  if (edges.size() != state.valid.size())
+    throw std::invalid_argument("leave_out: " + std::to_string(edges.size()) + " edge flags for " +
+                                std::to_string(state.valid.size()) + " quadrics");
+  int left_out = 0;
+  for (std::size_t i = 0; i < edges.size(); ++i)
+    if (edges[i] && state.valid[i]) {
+      state.valid[i] = 0;
+      ++left_out;
+    }
+  return left_out;
 }
 
 JointState initial_joint_state(const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& map) {

@@ -75,6 +75,29 @@ JointState initial_joint_state(const std::vector<Eigen::Isometry3d>& poses, cons
 void fill_joint_state(const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& map,
                       JointState& out);
 
+/// The quadrics the joint refiners leave out (JointParams::edge_tilt): 1 at each pixel of the
+/// reference whose initial normal came from a quadrant of its window tilted more than edge_tilt
+/// from the window's plane (estimate_normals, quadrant_tilt), i.e. whose window straddles a
+/// crease or a depth step; empty when edge_tilt is 0.
+///
+/// Such a quadric fits the centre's face, but the other face's samples near the edge line lie
+/// within the gate of its extension, differently in each frame. Measured noise-free (640x480
+/// walks, J-ftf frames 0–3, 30 iterations: the minimum, not an early stop), RMS relative
+/// translation with all quadrics / with these left out: cylinders_boxes 18.6 / 3.4 µm,
+/// torus_saddle 18.3 / 12.0 µm, room_spheres 8.7 / 5.9 µm; leaving out every quadrant pixel,
+/// those tilted by rounding alone included (17 % of the quadrics), 5.2 / 12.4 / 7.0 µm. The
+/// creases carry it: on cylinders_boxes leaving out only the windows with a depth step gave
+/// 18.3 µm, only the others 5.4 µm. edge_tilt 0.5° gave 3.1 / 12.4 µm on the first two, 10°
+/// 15.1 / 14.0 µm: a window that reaches a pixel or two across a crease tilts by a few degrees.
+/// Under range noise a quadrant rarely fits 100 times better than its window (quadrant_ratio):
+/// at 1 % 43–91 of about 300k quadrics were left out, and the poses moved by at most 0.3 µm.
+std::vector<unsigned char> edge_quadrics(const VertexMap& reference, const JointParams& params);
+
+/// Marks the `edges` of edge_quadrics invalid in `state`, so that they take no part and keep the
+/// initial map's fit; returns how many valid quadrics it left out. Empty edges leave all in.
+/// Throws std::invalid_argument when edges is neither empty nor one flag per quadric.
+int leave_out(const std::vector<unsigned char>& edges, JointState& state);
+
 /// Linearise, solve the reduced system, back-substitute, accept the step only when Σ w r² does
 /// not increase (else raise λ on diag A and diag C_p and retry), until the pose steps are below
 /// the tolerances; then the report, the covariance from the undamped system and the refined map

@@ -28,13 +28,18 @@ RefinementResult refine_window(const std::vector<VertexMap>& vertices,
                                const CameraIntrinsics& camera,
                                const std::vector<Eigen::Isometry3d>& initial_poses,
                                const QuadricMap& initial_quadrics, const JointParams& params,
-                               bool estimate_quadrics, const std::string& method) {
+                               bool estimate_quadrics, const std::string& method,
+                               const std::vector<unsigned char>* edges) {
   check_joint_inputs(vertices, camera, initial_poses, initial_quadrics);
   const JointSystem system(vertices, camera, params.quadric.pattern_for(camera.width),
                            params.terms(estimate_quadrics));
-  CpuJointProblem problem(system, initial_joint_state(initial_poses, initial_quadrics));
-  return run_joint_refinement(problem, params, estimate_quadrics, method, initial_quadrics,
-                              vertices[0]);
+  JointState initial = initial_joint_state(initial_poses, initial_quadrics);
+  const int left_out = leave_out(edges ? *edges : edge_quadrics(vertices[0], params), initial);
+  CpuJointProblem problem(system, std::move(initial));
+  RefinementResult result = run_joint_refinement(problem, params, estimate_quadrics, method,
+                                                 initial_quadrics, vertices[0]);
+  result.report.edge_quadrics = left_out;
+  return result;
 }
 
 JointWindow::JointWindow(const JointParams& params) : params_(params) {

@@ -24,11 +24,14 @@ class JointWindow final : public Refiner {
 };
 
 /// The CPU refinement of a window: JointSystem under the shared Levenberg-Marquardt loop
-/// run_joint_refinement (joint_problem.hpp). estimate_quadrics = false is Q-full.
+/// run_joint_refinement (joint_problem.hpp). estimate_quadrics = false is Q-full. The quadrics
+/// at creases and steps stay out (edge_quadrics, joint_problem.hpp): `edges` where the caller
+/// has them for vertices[0], else computed here.
 RefinementResult refine_window(const std::vector<VertexMap>& vertices,
                                const CameraIntrinsics& camera,
                                const std::vector<Eigen::Isometry3d>& initial_poses,
                                const QuadricMap& initial_quadrics, const JointParams& params,
-                               bool estimate_quadrics, const std::string& method);
+                               bool estimate_quadrics, const std::string& method,
+                               const std::vector<unsigned char>* edges = nullptr);
 
 }  // namespace jpcr

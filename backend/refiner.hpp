@@ -55,9 +55,9 @@ struct RefinementReport {
   /// is usable may be used even when it is not. Empty for the joint refiners, whose one verdict
   /// covers every pose. Q-full's other fields combine its pose problems': iterations the most of
   /// any, rejected_steps, terms and cost summed (a pose that ended keeps its last cost),
-  /// active_quadrics the most any pose saw, residual_variance and sample_reuse pooled over all
-  /// terms (each pose's covariance block uses its own), degeneracy the least of any pose's,
-  /// damping the largest.
+  /// active_quadrics the most any pose saw, edge_quadrics each pose's (the same in all),
+  /// residual_variance and sample_reuse pooled over all terms (each pose's covariance block uses
+  /// its own), degeneracy the least of any pose's, damping the largest.
   std::vector<RefinementVerdict> pose_verdicts;
   std::string error;               // kError: what the refiner threw; empty otherwise
   int iterations = 0;              // accepted steps
@@ -69,6 +69,8 @@ struct RefinementReport {
                                    // linearisation's quadrics with that linearisation's);
                                    // icp-bundle: Σ ρ(e²) at the start and after each solve
   int active_quadrics = 0;         // quadrics taking part at the end
+  int edge_quadrics = 0;           // valid quadrics left out at creases and steps, keeping
+                                   // their Quad IT fit (JointParams::edge_tilt)
   std::vector<int> seen;           // per pose T_2 … T_M: active quadrics that frame sees;
                                    // icp-bundle: residuals that involve the frame
   long terms = 0;                  // residual terms inside the gate at the end

@@ -315,15 +315,18 @@ void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraInt
   upload(frames, camera, pattern);
 }
 
-void CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
-                           const NeighbourhoodPattern& pattern,
-                           const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& initial) {
+int CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
+                          const NeighbourhoodPattern& pattern,
+                          const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& initial,
+                          const std::vector<unsigned char>& edges) {
   check_pair(frames, poses.size(), initial.status.size(), initial.status.size());
   if (initial.width() != frames[0].width() || initial.height() != frames[0].height())
     throw std::invalid_argument("CudaJointSystem: the quadric map differs in size from frame 0");
   const DeviceScope scope(device_->device);
   fill_joint_state(poses, initial, state_);
+  const int left_out = leave_out(edges, state_);
   upload(frames, camera, pattern);
+  return left_out;
 }
 
 // A device error part way (out of memory, a lost device) leaves nothing loaded rather than a
@@ -569,11 +572,13 @@ RefinementResult CudaJointFrameToFrame::refine(const std::vector<VertexMap>& ver
   if (vertices.size() != 2) throw std::invalid_argument("j-ftf: needs exactly two frames");
   check_joint_inputs(vertices, camera, initial_poses, initial_quadrics);
   std::lock_guard<std::mutex> lock(mutex_);
-  system_->load(vertices, camera, params_.quadric.pattern_for(camera.width), initial_poses,
-                initial_quadrics);
+  const std::vector<unsigned char> edges = edge_quadrics(vertices[0], params_);  // on the host
+  const int left_out = system_->load(vertices, camera, params_.quadric.pattern_for(camera.width),
+                                     initial_poses, initial_quadrics, edges);
   RefinementResult result =
       run_joint_refinement(*system_, params_, true, name(), initial_quadrics, vertices[0]);
   result.report.device = "cuda";
+  result.report.edge_quadrics = left_out;
   return result;
 }
 

@@ -51,10 +51,11 @@ class CudaJointSystem final : public JointProblem {
   void load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
             const NeighbourhoodPattern& pattern, JointState initial);
   /// The same from the poses {I, T₂} and Quad IT's map, converted into the state kept from the
-  /// last pair (fill_joint_state: no fresh host pages when the size is unchanged).
-  void load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
-            const NeighbourhoodPattern& pattern, const std::vector<Eigen::Isometry3d>& poses,
-            const QuadricMap& initial);
+  /// last pair (fill_joint_state: no fresh host pages when the size is unchanged), less the
+  /// `edges` (edge_quadrics, joint_problem.hpp; empty: none). Returns how many it left out.
+  int load(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
+           const NeighbourhoodPattern& pattern, const std::vector<Eigen::Isometry3d>& poses,
+           const QuadricMap& initial, const std::vector<unsigned char>& edges = {});
 
   ReducedSystem linearize(double lambda) override;  // factors stay on the device (empty here)
   double propose(const ReducedSystem& system, double lambda,

@@ -176,6 +176,7 @@ void read_joint(YamlSection yaml, JointParams& p) {
   yaml.read("min_frame_terms", p.min_frame_terms);
   yaml.read("min_pivot_ratio", p.min_pivot_ratio);
   yaml.read("ray_min_cosine", p.ray_min_cosine);
+  yaml.read("edge_tilt", p.edge_tilt);
   yaml.read("initial_damping", p.initial_damping);
   yaml.read("damping_factor", p.damping_factor);
   yaml.read("damping_decrease", p.damping_decrease);

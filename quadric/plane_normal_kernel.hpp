@@ -201,17 +201,21 @@ JPCR_HD bool window_moments(const VertexView& vertices, int u, int v,
 /// of the window points about their mean (closed-form 3x3 solve, computeDirect, in double), or
 /// a quadrant's where the window holds no single smooth surface (choose_quadrant). Unit,
 /// n·X < 0; all-NaN where the centre has no vertex, too few window points remain or the points
-/// are collinear.
+/// are collinear. `window_normal`, where given, receives the window's own plane normal (the
+/// result unless a quadrant replaced it; NaN where there is none).
 JPCR_HD Eigen::Vector3f plane_normal(const VertexView& vertices, int u, int v,
-                                     const NormalEstimationParams& p) {
+                                     const NormalEstimationParams& p,
+                                     Eigen::Vector3f* window_normal = nullptr) {
   Eigen::Vector3d sum;
   Eigen::Matrix3d outer;
   int count;
-  if (!window_moments(vertices, u, v, p, sum, outer, count))
-    return Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  const Eigen::Vector3f none = Eigen::Vector3f::Constant(std::numeric_limits<float>::quiet_NaN());
+  if (window_normal) *window_normal = none;
+  if (!window_moments(vertices, u, v, p, sum, outer, count)) return none;
   double residual = 0.0;
   const Eigen::Vector3f n =
       plane_normal_from_moments(sum, outer, count, vertices(u, v), p, &residual);
+  if (window_normal) *window_normal = n;
   if (!may_take_a_quadrant(n, residual, p)) return n;
   QuadrantMoments m;
   quadrant_moments(vertices, u, v, p, m);

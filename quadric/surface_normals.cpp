@@ -1,6 +1,7 @@
 #include "jpcr/quadric/surface_normals.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "jpcr/quadric/error.hpp"
@@ -83,8 +84,9 @@ class CleanWindows {
     return true;
   }
 
-  /// The normal at (u, v) of the loaded row; false when the window is not clean.
-  bool normal(int u, int v, Eigen::Vector3f& n) const {
+  /// The normal at (u, v) of the loaded row, and the window's own plane normal; false when the
+  /// window is not clean.
+  bool normal(int u, int v, Eigen::Vector3f& n, Eigen::Vector3f& window) const {
     const int h = p_.half_window;
     if (u < h || u + h >= vertices_.width()) return false;
     const Eigen::Vector3f& centre = vertices_(u, v);
@@ -106,6 +108,7 @@ class CleanWindows {
     m.to(sum, outer);
     double residual = 0.0;
     n = plane_normal_from_moments(sum, outer, (2 * h + 1) * (2 * h + 1), centre, p_, &residual);
+    window = n;
     if (!may_take_a_quadrant(n, residual, p_)) return true;
     QuadrantMoments quadrants;
     for (int q = 0; q < 4; ++q) {
@@ -145,8 +148,10 @@ void NormalEstimationParams::validate() const {
     throw InputError("quadrant_ratio: must be 0 (off) or in [1, 1e12]");
 }
 
-NormalMap estimate_normals(const VertexMap& vertices, const NormalEstimationParams& params) {
+NormalMap estimate_normals(const VertexMap& vertices, const NormalEstimationParams& params,
+                           Image<float>* quadrant_tilt) {
   NormalMap normals(vertices.width(), vertices.height(), invalid_vector());
+  if (quadrant_tilt) *quadrant_tilt = Image<float>(vertices.width(), vertices.height(), 0.0f);
   const VertexView view{vertices.data(), vertices.width(), vertices.height()};
 #pragma omp parallel
   {
@@ -156,8 +161,12 @@ NormalMap estimate_normals(const VertexMap& vertices, const NormalEstimationPara
       const bool loaded = windows.load_row(v);
       for (int u = 0; u < vertices.width(); ++u) {
         if (!is_sample_point(vertices(u, v))) continue;  // no centre: no normal
-        if (!loaded || !windows.normal(u, v, normals(u, v)))
-          normals(u, v) = plane_normal(view, u, v, params);
+        Eigen::Vector3f& n = normals(u, v);
+        Eigen::Vector3f window;
+        if (!loaded || !windows.normal(u, v, n, window))
+          n = plane_normal(view, u, v, params, &window);
+        if (quadrant_tilt && n.x() == n.x() && window.x() == window.x())
+          (*quadrant_tilt)(u, v) = std::acos(std::clamp(n.dot(window), -1.0f, 1.0f));
       }
     }
   }

@@ -20,7 +20,11 @@ struct NormalEstimationParams {
 };
 
 /// One normal per pixel (camera frame, unit, n·X < 0); NaN where the centre has no vertex, too few
-/// window points remain or the points are collinear.
-NormalMap estimate_normals(const VertexMap& vertices, const NormalEstimationParams& params = {});
+/// window points remain or the points are collinear. `quadrant_tilt`, where given, receives per
+/// pixel the angle (rad) by which a quadrant's normal replaced the window's plane: 0 where the
+/// window's plane is the normal (or there is none), above a degree or so where the window
+/// straddles a crease or a step (the joint refiners leave those quadrics out, JointParams).
+NormalMap estimate_normals(const VertexMap& vertices, const NormalEstimationParams& params = {},
+                           Image<float>* quadrant_tilt = nullptr);
 
 }  // namespace jpcr

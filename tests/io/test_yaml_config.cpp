@@ -203,5 +203,20 @@ TEST(Params, IcpBundleSection) {
             std::string::npos);
 }
 
+// joint.edge_tilt: the shipped value is the built-in default, 0 turns it off, and a value
+// outside [0, 90] degrees names the file, line and key.
+TEST(Params, JointEdgeTilt) {
+  EXPECT_FLOAT_EQ(load_params(kConfigs + "default.yaml").joint.edge_tilt, JointParams{}.edge_tilt);
+  EXPECT_FLOAT_EQ(parse_params("joint:\n  edge_tilt: 0\n", "p.yaml").joint.edge_tilt, 0.0f);
+  EXPECT_NE(error_of([] {
+              parse_params("joint:\n  edge_tilt: 120\n", "e.yaml");
+            }).find("e.yaml:2: key 'joint.edge_tilt': must be in [0, 90]"),
+            std::string::npos);
+  EXPECT_NE(error_of([] {
+              parse_params("joint:\n  edge_tilt: -1\n", "e.yaml");
+            }).find("joint.edge_tilt"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace jpcr

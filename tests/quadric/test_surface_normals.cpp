@@ -209,7 +209,10 @@ TEST(SurfaceNormals, ADepthStepBelowTheJumpLeavesEachSideItsPlanesNormal) {
 }
 
 // A crease: two planes meeting at 127° along a vertical line (z = 2 + 0.5 |x|, seen from the
-// front). A pixel beside it gets the normal of its own face (the window's plane averages both).
+// front). A pixel beside it gets the normal of its own face (the window's plane averages both),
+// and quadrant_tilt says by how much its window's plane was off: above the joint refiners'
+// 2° (JointParams::edge_tilt) where the window reaches across the crease, at rounding level
+// (a plane's window and quadrant fits agree) where it does not.
 TEST(SurfaceNormals, ACreaseLeavesEachFaceItsNormal) {
   VertexMap vertices(kW, kH);
   for (int v = 0; v < kH; ++v)
@@ -218,14 +221,24 @@ TEST(SurfaceNormals, ACreaseLeavesEachFaceItsNormal) {
       const double t = 2.0 / (1.0 - 0.5 * std::abs(r.x()));  // z = t = 2 + 0.5 |t r_x|
       vertices(u, v) = (t * r).cast<float>();
     }
-  const NormalMap normals = estimate_normals(vertices, NormalEstimationParams{});
+  Image<float> tilt;
+  const NormalMap normals = estimate_normals(vertices, NormalEstimationParams{}, &tilt);
   const Eigen::Vector3d left = Eigen::Vector3d(-0.5, 0.0, -1.0).normalized(),
                         right = Eigen::Vector3d(0.5, 0.0, -1.0).normalized();
-  for (int v = 10; v < kH - 10; v += 7)
+  const double two_degrees = 2.0 * M_PI / 180.0;
+  for (int v = 10; v < kH - 10; v += 7) {
     for (int u = 76; u <= 83; ++u) {
       if (u == 79 || u == 80) continue;  // the crease runs between these columns
       expect_normal(vertices, normals, u, v, u < 80 ? left : right, 1e-4);
+      // The window (±3 px) of columns 77–82 holds both faces; that of 76 and 83 one.
+      if (u >= 77 && u <= 82)
+        EXPECT_GT(tilt(u, v), two_degrees) << u << "," << v;
+      else
+        EXPECT_LT(tilt(u, v), 1e-3) << u << "," << v;
     }
+    for (int u = 4; u < kW - 4; ++u)
+      if (u < 76 || u > 83) EXPECT_LT(tilt(u, v), 1e-3) << u << "," << v;  // one face
+  }
 }
 
 // A smooth surface keeps the window's plane: on a sphere of radius 5 cm at 0.5 m (1.3 mm of
@@ -246,7 +259,8 @@ TEST(SurfaceNormals, ASmoothSurfaceKeepsTheWindowsPlane) {
       vertices(u, v) = ((b - std::sqrt(b * b - c)) * d).cast<float>();
     }
   const NormalEstimationParams p;
-  const NormalMap normals = estimate_normals(vertices, p);
+  Image<float> tilt;
+  const NormalMap normals = estimate_normals(vertices, p, &tilt);
   const VertexView view{vertices.data(), vertices.width(), vertices.height()};
   int checked = 0;
   for (int v = 0; v < kH; ++v)
@@ -260,6 +274,10 @@ TEST(SurfaceNormals, ASmoothSurfaceKeepsTheWindowsPlane) {
       ASSERT_TRUE(is_valid(window));
       EXPECT_LT(angle(normals(u, v), window.cast<double>()), 1e-5) << u << "," << v;
       EXPECT_LT(angle(plane_normal(view, u, v, p), window.cast<double>()), 1e-5) << u << "," << v;
+      EXPECT_EQ(tilt(u, v), 0.0f) << u << "," << v;  // the window's plane itself
+      Eigen::Vector3f window_out;
+      plane_normal(view, u, v, p, &window_out);
+      EXPECT_LT(angle(window_out, window.cast<double>()), 1e-5) << u << "," << v;
       ++checked;
     }
   EXPECT_GT(checked, 250);  // 300 measured
