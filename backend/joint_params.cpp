@@ -17,8 +17,9 @@ void JointParams::validate() const {
     throw InputError("min_pivot_ratio: must be in (0, 1)");
   if (!(ray_min_cosine >= 0.0f && ray_min_cosine < 1.0f))
     throw InputError("ray_min_cosine: must be in [0, 1) (0: lever arms at the samples)");
-  if (!(edge_tilt >= 0.0f && edge_tilt <= 90.0f))
-    throw InputError("edge_tilt: must be in [0, 90] (deg; 0: every quadric takes part)");
+  // Below 0.1° a quadrant's plane can differ from its window's by rounding alone (a plane).
+  if (!(edge_tilt == 0.0f || (edge_tilt >= 0.1f && edge_tilt <= 90.0f)))
+    throw InputError("edge_tilt: must be 0 (every quadric takes part) or in [0.1, 90] (deg)");
   if (!(initial_damping > 0.0)) throw InputError("initial_damping: must be > 0");
   if (!(damping_factor > 1.0)) throw InputError("damping_factor: must be > 1");
   if (!(damping_decrease > 1.0)) throw InputError("damping_decrease: must be > 1");

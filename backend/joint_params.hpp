@@ -29,10 +29,11 @@ struct JointParams {
   // until it is measured on every scene and noise level: it removes most of J-ftf's bias under
   // range noise on some pairs and not on others (accumulate_frame_terms).
   float ray_min_cosine = 0.0f;
-  // deg: a quadric whose initial normal came from a quadrant of its 7x7 window tilted more than
+  // deg: a quadric whose initial normal came from a quadrant of its window tilted more than
   // this from the window's plane (estimate_normals' quadrant_tilt: the window straddles a crease
   // or a depth step) stays out of the joint system and keeps its Quad IT fit (edge_quadrics,
-  // joint_problem.hpp). 0: every valid quadric takes part.
+  // joint_problem.hpp, from the reference's vertices and quadric.normals, as Quad IT's initial
+  // map is made). 0: every valid quadric takes part; else in [0.1, 90].
   float edge_tilt = 2.0f;
   double initial_damping = 1e-4;  // λ: relative Levenberg damping of diag A and diag C_p
   double damping_factor = 10.0;   // λ ← λ·f after a rejected step ...

@@ -123,7 +123,9 @@ void check_joint_inputs(const std::vector<VertexMap>& vertices, const CameraIntr
 }
 
 std::vector<unsigned char> edge_quadrics(const VertexMap& reference, const JointParams& params) {
-  if (params.edge_tilt == 0.0f) return {};
+  params.validate();
+  // Without the quadrants' choice every normal is its window's plane: nothing to leave out.
+  if (params.edge_tilt == 0.0f || params.quadric.normals.quadrant_ratio == 0.0f) return {};
   Image<float> tilt;
   estimate_normals(reference, params.quadric.normals, &tilt);
   const float limit = params.edge_tilt * static_cast<float>(M_PI / 180.0);

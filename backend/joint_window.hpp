@@ -26,7 +26,8 @@ class JointWindow final : public Refiner {
 /// The CPU refinement of a window: JointSystem under the shared Levenberg-Marquardt loop
 /// run_joint_refinement (joint_problem.hpp). estimate_quadrics = false is Q-full. The quadrics
 /// at creases and steps stay out (edge_quadrics, joint_problem.hpp): `edges` where the caller
-/// has them for vertices[0], else computed here.
+/// has them for vertices[0] (an empty vector leaves every quadric in), else (nullptr) computed
+/// here from vertices[0] and params.quadric.normals.
 RefinementResult refine_window(const std::vector<VertexMap>& vertices,
                                const CameraIntrinsics& camera,
                                const std::vector<Eigen::Isometry3d>& initial_poses,

@@ -296,12 +296,12 @@ namespace {
 // frame 2 with frame 1's), two poses and one quadric and one validity flag per pixel: checked
 // before load() touches anything, so a rejected pair leaves the loaded one as it was.
 void check_pair(const std::vector<VertexMap>& frames, std::size_t poses, std::size_t quadrics,
-                std::size_t valid) {
+                std::size_t valid, std::size_t edges = 0) {
   if (frames.size() != 2 || poses != 2)
     throw std::invalid_argument("CudaJointSystem: J-ftf needs exactly two frames and two poses");
   const std::size_t pixels = frames[0].size();
   if (frames[1].width() != frames[0].width() || frames[1].height() != frames[0].height() ||
-      quadrics != pixels || valid != pixels)
+      quadrics != pixels || valid != pixels || (edges != 0 && edges != pixels))
     throw std::invalid_argument("CudaJointSystem: frames and state differ in size");
 }
 
@@ -319,7 +319,7 @@ int CudaJointSystem::load(const std::vector<VertexMap>& frames, const CameraIntr
                           const NeighbourhoodPattern& pattern,
                           const std::vector<Eigen::Isometry3d>& poses, const QuadricMap& initial,
                           const std::vector<unsigned char>& edges) {
-  check_pair(frames, poses.size(), initial.status.size(), initial.status.size());
+  check_pair(frames, poses.size(), initial.status.size(), initial.status.size(), edges.size());
   if (initial.width() != frames[0].width() || initial.height() != frames[0].height())
     throw std::invalid_argument("CudaJointSystem: the quadric map differs in size from frame 0");
   const DeviceScope scope(device_->device);

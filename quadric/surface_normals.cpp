@@ -165,7 +165,7 @@ NormalMap estimate_normals(const VertexMap& vertices, const NormalEstimationPara
         Eigen::Vector3f window;
         if (!loaded || !windows.normal(u, v, n, window))
           n = plane_normal(view, u, v, params, &window);
-        if (quadrant_tilt && n.x() == n.x() && window.x() == window.x())
+        if (quadrant_tilt && n.x() == n.x() && window.x() == window.x() && n != window)
           (*quadrant_tilt)(u, v) = std::acos(std::clamp(n.dot(window), -1.0f, 1.0f));
       }
     }

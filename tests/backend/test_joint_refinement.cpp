@@ -521,7 +521,7 @@ TEST(JointRefinement, EdgeQuadricsStayOutAndKeepTheirQuadItFit) {
   const int valid = static_cast<int>(initial.valid_count());
   std::printf("%d of %d valid quadrics at creases and steps\n", flagged, valid);
   // 2544 of 19172 measured: the 7x7 window spans 4x the image fraction it spans at 640x480,
-  // where 3–5 % of the quadrics are left out.
+  // where 3.5–5.5 % of the quadrics are left out.
   EXPECT_GT(flagged, valid / 20);
   EXPECT_LT(flagged, valid / 5);
 

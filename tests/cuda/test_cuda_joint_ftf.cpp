@@ -279,7 +279,9 @@ TEST(CudaJointFrameToFrame, RefinesAPairToConvergenceAsTheCpu) {
   const JointSystem reference(pair.vertices, pair.camera,
                               params.quadric.pattern.for_width(pair.camera.width),
                               params.terms(true), JointSampling::kReference);
-  CpuJointProblem problem(reference, initial_joint_state(start, initial));
+  JointState state = initial_joint_state(start, initial);
+  const int left_out = leave_out(edge_quadrics(pair.vertices[0], params), state);
+  CpuJointProblem problem(reference, std::move(state));
   const RefinementResult cpu =
       run_joint_refinement(problem, params, true, "j-ftf", initial, pair.vertices[0]);
   const CudaJointFrameToFrame gpu_refiner(params);
@@ -309,6 +311,7 @@ TEST(CudaJointFrameToFrame, RefinesAPairToConvergenceAsTheCpu) {
   EXPECT_EQ(gpu.report.device, "cuda");
   EXPECT_EQ(gpu.report.iterations, cpu.report.iterations) << "seed " << seed;
   EXPECT_EQ(gpu.report.active_quadrics, cpu.report.active_quadrics) << "seed " << seed;
+  EXPECT_EQ(gpu.report.edge_quadrics, left_out) << "seed " << seed;
   EXPECT_LE(dt, 1e-6) << "seed " << seed;
   EXPECT_LE(dr, 1e-6) << "seed " << seed;
   EXPECT_LE(rms, 1e-4) << "seed " << seed;
@@ -370,6 +373,9 @@ TEST(CudaJointFrameToFrame, ARejectedLoadKeepsTheLoadedPair) {
   EXPECT_THROW(gpu.load(pair.vertices, pair.camera, pattern, {poses[0]}, initial),
                std::invalid_argument);
   EXPECT_THROW(gpu.load(pair.vertices, pair.camera, pattern, poses, QuadricMap(80, 60)),
+               std::invalid_argument);
+  EXPECT_THROW(gpu.load(pair.vertices, pair.camera, pattern, poses, initial,
+                        std::vector<unsigned char>(7, 1)),  // edge flags of another size
                std::invalid_argument);
   // Frames of as many pixels but another shape (the kernels would read frame 2 wrongly).
   const VertexMap transposed(pair.vertices[1].height(), pair.vertices[1].width(),

@@ -204,16 +204,17 @@ TEST(Params, IcpBundleSection) {
 }
 
 // joint.edge_tilt: the shipped value is the built-in default, 0 turns it off, and a value
-// outside [0, 90] degrees names the file, line and key.
+// outside [0.1, 90] degrees names the file, line and key.
 TEST(Params, JointEdgeTilt) {
   EXPECT_FLOAT_EQ(load_params(kConfigs + "default.yaml").joint.edge_tilt, JointParams{}.edge_tilt);
   EXPECT_FLOAT_EQ(parse_params("joint:\n  edge_tilt: 0\n", "p.yaml").joint.edge_tilt, 0.0f);
   EXPECT_NE(error_of([] {
               parse_params("joint:\n  edge_tilt: 120\n", "e.yaml");
-            }).find("e.yaml:2: key 'joint.edge_tilt': must be in [0, 90]"),
+            }).find("e.yaml:2: key 'joint.edge_tilt': must be 0 (every quadric takes part) or in "
+                    "[0.1, 90] (deg)"),
             std::string::npos);
   EXPECT_NE(error_of([] {
-              parse_params("joint:\n  edge_tilt: -1\n", "e.yaml");
+              parse_params("joint:\n  edge_tilt: 0.01\n", "e.yaml");
             }).find("joint.edge_tilt"),
             std::string::npos);
 }
