@@ -5,6 +5,7 @@
 #include <benchmark/benchmark.h>
 
 #include "bench_windows.hpp"
+#include "benchmark_main.hpp"
 #include "jpcr/backend/icp_bundle.hpp"
 
 namespace {
@@ -36,4 +37,9 @@ BENCHMARK(BM_IcpBundleWindow)
 
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  return jpcr::bench::benchmark_main(
+      argc, argv, "bench_icp_bundle",
+      "Times one whole ICP-bundle window refinement (overlap test, association and Ceres\n"
+      "solves) on room_spheres with 1 % range noise, M = 5, at 320x240 and 640x480.");
+}
