@@ -208,10 +208,9 @@ TEST(Params, IcpBundleSection) {
 TEST(Params, JointEdgeTilt) {
   EXPECT_FLOAT_EQ(load_params(kConfigs + "default.yaml").joint.edge_tilt, JointParams{}.edge_tilt);
   EXPECT_FLOAT_EQ(parse_params("joint:\n  edge_tilt: 0\n", "p.yaml").joint.edge_tilt, 0.0f);
-  EXPECT_NE(error_of([] {
-              parse_params("joint:\n  edge_tilt: 120\n", "e.yaml");
-            }).find("e.yaml:2: key 'joint.edge_tilt': must be 0 (every quadric takes part) or in "
-                    "[0.1, 90] (deg)"),
+  EXPECT_NE(error_of([] { parse_params("joint:\n  edge_tilt: 120\n", "e.yaml"); })
+                .find("e.yaml:2: key 'joint.edge_tilt': must be 0 (every quadric takes part) or in "
+                      "[0.1, 90] (deg)"),
             std::string::npos);
   EXPECT_NE(error_of([] {
               parse_params("joint:\n  edge_tilt: 0.01\n", "e.yaml");
