@@ -27,8 +27,8 @@ inline int benchmark_main(int argc, char** argv, const char* name, const char* d
     if (a == "--help" || a == "-h") {
       std::printf(
           "usage: %s [Google Benchmark options]\n\n%s\n\n"
-          "Common options (all: --benchmark_list_tests=true lists the benchmarks, and the\n"
-          "library documents the rest):\n"
+          "Common options (--benchmark_list_tests=true lists the benchmarks; Google Benchmark's\n"
+          "documentation has the rest):\n"
           "  --benchmark_filter=REGEX        run only the benchmarks whose name matches\n"
           "  --benchmark_repetitions=N       repeat each N times; the ratios use the median\n"
           "  --benchmark_min_time=Xs         run each for at least X seconds\n"
