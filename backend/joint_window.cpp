@@ -1,6 +1,7 @@
 #include "jpcr/backend/joint_window.hpp"
 
 #include "jpcr/backend/joint_problem.hpp"
+#include "jpcr/backend/lower_cost_fit.hpp"
 
 namespace jpcr {
 
@@ -39,6 +40,9 @@ RefinementResult refine_window(const std::vector<VertexMap>& vertices,
   RefinementResult result = run_joint_refinement(problem, params, estimate_quadrics, method,
                                                  initial_quadrics, vertices[0]);
   result.report.edge_quadrics = left_out;
+  if (estimate_quadrics && params.keep_lower_cost_fit)
+    result.report.quad_it_fits_restored = keep_lower_cost_fits(
+        vertices, camera, result.poses, params, initial_quadrics, result.quadrics);
   return result;
 }
 

@@ -24,6 +24,7 @@
 #include <cuda_runtime.h>
 
 #include "jpcr/backend/joint_pixel_kernel.hpp"
+#include "jpcr/backend/lower_cost_fit.hpp"
 #include "jpcr/cuda/cuda_check.hpp"
 #include "jpcr/cuda/device_memory.hpp"
 #include "jpcr/cuda/stream_events.hpp"
@@ -579,6 +580,9 @@ RefinementResult CudaJointFrameToFrame::refine(const std::vector<VertexMap>& ver
       run_joint_refinement(*system_, params_, true, name(), initial_quadrics, vertices[0]);
   result.report.device = "cuda";
   result.report.edge_quadrics = left_out;
+  if (params_.keep_lower_cost_fit)  // on the host, as the CPU refiners
+    result.report.quad_it_fits_restored = keep_lower_cost_fits(
+        vertices, camera, result.poses, params_, initial_quadrics, result.quadrics);
   return result;
 }
 

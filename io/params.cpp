@@ -177,6 +177,7 @@ void read_joint(YamlSection yaml, JointParams& p) {
   yaml.read("min_pivot_ratio", p.min_pivot_ratio);
   yaml.read("ray_min_cosine", p.ray_min_cosine);
   yaml.read("edge_tilt", p.edge_tilt);
+  yaml.read("keep_lower_cost_fit", p.keep_lower_cost_fit);
   yaml.read("initial_damping", p.initial_damping);
   yaml.read("damping_factor", p.damping_factor);
   yaml.read("damping_decrease", p.damping_decrease);

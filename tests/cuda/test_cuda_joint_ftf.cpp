@@ -26,6 +26,7 @@
 #include "jpcr/backend/joint_frame_to_frame.hpp"
 #include "jpcr/backend/joint_problem.hpp"
 #include "jpcr/backend/joint_system.hpp"
+#include "jpcr/backend/lower_cost_fit.hpp"
 #include "jpcr/cuda/cpu_fallback_refiner.hpp"
 #include "jpcr/cuda/cuda_joint_ftf.hpp"
 #include "jpcr/cuda/refiner_factory.hpp"
@@ -273,6 +274,8 @@ TEST(CudaJointFrameToFrame, RefinesAPairToConvergenceAsTheCpu) {
   const std::uint64_t seed = announce_seed();
   JointParams params;  // n₀ and the gate grow with the range, as for range noise in Quad IT
   params.quadric.fit.fair_n0_per_range = params.quadric.fit.gate_per_range = 0.03f;
+  // The loop's parity first; keep_lower_cost_fit, host code after the loop, is checked below.
+  params.keep_lower_cost_fit = false;
   const test::RandomPair pair = test::random_pair(seed, 320, 240);
   const QuadricMap initial = QuadricFit(params.quadric).estimate(pair.vertices[0]);
   const std::vector<Eigen::Isometry3d> start = {Eigen::Isometry3d::Identity(), pair.start};
@@ -321,6 +324,21 @@ TEST(CudaJointFrameToFrame, RefinesAPairToConvergenceAsTheCpu) {
   } else {
     EXPECT_EQ(gpu.covariance[1].norm(), 0.0) << "seed " << seed;
   }
+  // With keep_lower_cost_fit (the default) the GPU refiner restores the Quad IT fits that the
+  // host's keep_lower_cost_fits restores on its result (up to near-ties, which the rounding of
+  // the device sums may turn).
+  JointParams kept = params;
+  kept.keep_lower_cost_fit = true;
+  const RefinementResult gpu_kept =
+      CudaJointFrameToFrame(kept).refine(pair.vertices, pair.camera, start, initial);
+  QuadricMap host = gpu.quadrics;
+  const int restored =
+      keep_lower_cost_fits(pair.vertices, pair.camera, gpu.poses, kept, initial, host);
+  std::printf("restored: GPU refiner %d, host on its result %d\n",
+              gpu_kept.report.quad_it_fits_restored, restored);
+  EXPECT_EQ(gpu.report.quad_it_fits_restored, 0) << "seed " << seed;
+  EXPECT_NEAR(gpu_kept.report.quad_it_fits_restored, restored, 0.02 * restored + 2)
+      << "seed " << seed;
 }
 
 TEST(CudaJointFrameToFrame, ReusesDeviceBuffersAcrossPairs) {

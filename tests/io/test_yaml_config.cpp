@@ -203,6 +203,20 @@ TEST(Params, IcpBundleSection) {
             std::string::npos);
 }
 
+// joint.keep_lower_cost_fit: shipped on, as built in; false is the paper's refiners; anything
+// but a boolean names the file, line and key.
+TEST(Params, JointKeepLowerCostFit) {
+  EXPECT_TRUE(JointParams{}.keep_lower_cost_fit);
+  EXPECT_EQ(load_params(kConfigs + "default.yaml").joint.keep_lower_cost_fit,
+            JointParams{}.keep_lower_cost_fit);
+  EXPECT_FALSE(
+      parse_params("joint:\n  keep_lower_cost_fit: false\n", "p.yaml").joint.keep_lower_cost_fit);
+  EXPECT_NE(error_of([] { parse_params("joint:\n  keep_lower_cost_fit: maybe\n", "k.yaml"); })
+                .find("k.yaml:2: key 'joint.keep_lower_cost_fit': expected true or false, got "
+                      "'maybe'"),
+            std::string::npos);
+}
+
 // joint.edge_tilt: the shipped value is the built-in default, 0 turns it off, and a value
 // outside [0.1, 90] degrees names the file, line and key.
 TEST(Params, JointEdgeTilt) {

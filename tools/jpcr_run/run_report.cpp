@@ -37,6 +37,7 @@ void write_refinement(JsonWriter& json, const char* name,
       .field("cost", r->cost)
       .field("active_quadrics", r->active_quadrics)
       .field("edge_quadrics", r->edge_quadrics)  // left out, keeping their Quad IT fit
+      .field("quad_it_fits_restored", r->quad_it_fits_restored)  // keep_lower_cost_fit
       .field("residual_variance", r->residual_variance)
       .field("sample_reuse", r->sample_reuse)  // the covariance's inflation (refiner.hpp)
       .field("degeneracy", r->degeneracy)
