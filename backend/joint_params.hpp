@@ -35,10 +35,10 @@ struct JointParams {
   // joint_problem.hpp, from the reference's vertices and quadric.normals, as Quad IT's initial
   // map is made). 0: every valid quadric takes part; else in [0.1, 90].
   float edge_tilt = 2.0f;
-  // Once the loop has converged, each quadric keeps its refined fit only where that fit's gated
-  // cost over the window's samples is not above its Quad IT start's at the refined poses
-  // (keep_lower_cost_fits, lower_cost_fit.hpp: Quad IT's step test, per quadric); the poses do
-  // not change. false: every refined fit, as the paper.
+  // After the loop (once it has taken a step), each quadric keeps its refined fit only where that
+  // fit's gated cost over the window's samples is not above its Quad IT start's at the refined
+  // poses (keep_lower_cost_fits, lower_cost_fit.hpp: Quad IT's step test, per quadric); the poses
+  // do not change. false: every refined fit, as the paper.
   bool keep_lower_cost_fit = true;
   double initial_damping = 1e-4;  // λ: relative Levenberg damping of diag A and diag C_p
   double damping_factor = 10.0;   // λ ← λ·f after a rejected step ...

@@ -40,7 +40,7 @@ RefinementResult refine_window(const std::vector<VertexMap>& vertices,
   RefinementResult result = run_joint_refinement(problem, params, estimate_quadrics, method,
                                                  initial_quadrics, vertices[0]);
   result.report.edge_quadrics = left_out;
-  if (estimate_quadrics && params.keep_lower_cost_fit)
+  if (estimate_quadrics && params.keep_lower_cost_fit && result.report.iterations > 0)
     result.report.quad_it_fits_restored = keep_lower_cost_fits(
         vertices, camera, result.poses, params, initial_quadrics, result.quadrics);
   return result;

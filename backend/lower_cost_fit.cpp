@@ -17,6 +17,8 @@ int keep_lower_cost_fits(const std::vector<VertexMap>& vertices, const CameraInt
   if (initial.width() != width || initial.height() != height)
     throw std::invalid_argument(
         "keep_lower_cost_fits: the initial and refined maps differ in size");
+  if (camera.width != width || camera.height != height)
+    throw std::invalid_argument("keep_lower_cost_fits: the camera differs in size from the maps");
   for (const VertexMap& f : vertices)
     if (f.width() != width || f.height() != height)
       throw std::invalid_argument("keep_lower_cost_fits: a frame differs in size from the maps");
@@ -30,6 +32,7 @@ int keep_lower_cost_fits(const std::vector<VertexMap>& vertices, const CameraInt
   for (int j = 0; j < frames; ++j) {
     const VertexMap& f = vertices[static_cast<std::size_t>(j)];
     views.push_back(VertexView{f.data(), f.width(), f.height()});
+    if (j == 0) continue;  // frame 1 is the reference: the identity, as in the joint terms
     motions[static_cast<std::size_t>(j)].R = poses[static_cast<std::size_t>(j)].linear();
     motions[static_cast<std::size_t>(j)].t = poses[static_cast<std::size_t>(j)].translation();
   }
@@ -43,8 +46,10 @@ int keep_lower_cost_fits(const std::vector<VertexMap>& vertices, const CameraInt
         if (!refined.valid(u, v) || !initial.valid(u, v)) continue;
         const Quadricd start = initial.quadrics(u, v).cast<double>();
         const Quadricd fit = refined.quadrics(u, v).cast<double>();
-        // The centre p̄ is the pixel's vertex in both (the joint step moves t_z, not p̄), so both
-        // fits see the same samples; the gate and n₀ grow with its range.
+        // The centre p̄ is the pixel's vertex in both (the joint step moves R, t_z, a, b, c, not
+        // p̄), so both fits see the same samples, gathered about p̄; the gate and n₀ grow with its
+        // range. Maps of other origins, whose centres differ, are not compared.
+        if (start.center != fit.center) continue;
         const SampleGate<double> limits = SampleGate<double>::at(terms.fit, fit.center);
         double start_cost = 0.0, fit_cost = 0.0;
         for (int j = 0; j < frames; ++j) {

@@ -580,7 +580,7 @@ RefinementResult CudaJointFrameToFrame::refine(const std::vector<VertexMap>& ver
       run_joint_refinement(*system_, params_, true, name(), initial_quadrics, vertices[0]);
   result.report.device = "cuda";
   result.report.edge_quadrics = left_out;
-  if (params_.keep_lower_cost_fit)  // on the host, as the CPU refiners
+  if (params_.keep_lower_cost_fit && result.report.iterations > 0)  // on the host, as the CPU
     result.report.quad_it_fits_restored = keep_lower_cost_fits(
         vertices, camera, result.poses, params_, initial_quadrics, result.quadrics);
   return result;

@@ -82,6 +82,17 @@ inline bool bitwise_equal(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b
 }
 
 /// One line per refinement: verdict, steps, what took part, the cost history.
+/// The same status at pixel (u, v) and, where valid, the same fit to the bit: quadric,
+/// curvature and direction (an invalid pixel's curvature is NaN, so only its status counts).
+inline bool same_fit(const QuadricMap& a, const QuadricMap& b, int u, int v) {
+  if (a.status(u, v) != b.status(u, v)) return false;
+  if (!a.valid(u, v)) return true;
+  const Quadric &p = a.quadrics(u, v), &q = b.quadrics(u, v);
+  return p.R == q.R && p.center == q.center && p.t_z == q.t_z && p.a == q.a && p.b == q.b &&
+         p.c == q.c && a.curvature(u, v) == b.curvature(u, v) &&
+         a.direction(u, v) == b.direction(u, v);
+}
+
 inline void print_report(const RefinementReport& r) {
   std::printf("%s: %s after %d steps (%d rejected), %d quadrics, %ld terms, cost", r.method.c_str(),
               to_string(r.verdict), r.iterations, r.rejected_steps, r.active_quadrics, r.terms);
