@@ -13,6 +13,7 @@
 #include "benchmark_main.hpp"
 #include "joint_bench_window.hpp"
 #include "jpcr/backend/joint_params.hpp"
+#include "jpcr/backend/lower_cost_fit.hpp"
 
 namespace {
 
@@ -100,6 +101,49 @@ void BM_FixedQuadricIteration(benchmark::State& state) {
   run(state, false);
 }
 
+// keep_lower_cost_fits (joint.keep_lower_cost_fit), the pass after the loop: the refined map is
+// the candidate of one iteration from the start (what a refinement hands it, up to how far the
+// quadrics moved), judged against Quad IT's map over every frame. Run once per refinement, so
+// its ratio to one iteration says what it adds to a refinement of that many iterations.
+void BM_KeepLowerCostFits(benchmark::State& state) {
+  const jpcr::bench::JointBenchWindow w = jpcr::bench::make_joint_window(
+      static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const jpcr::JointParams params;
+  const jpcr::JointSystem system(
+      w.vertices, w.camera, params.quadric.pattern.for_width(w.camera.width), params.terms(true));
+  jpcr::ReducedSystem lin;
+  std::vector<jpcr::Vector6d> steps;
+  system.linearize(w.state, params.initial_damping, lin);
+  if (!jpcr::JointSystem::solve_poses(lin, params.initial_damping, steps)) {
+    state.SkipWithError("the reduced system is singular");
+    return;
+  }
+  const jpcr::JointStep step = system.step(w.state, lin, params.initial_damping, steps);
+  jpcr::QuadricMap moved = w.initial;
+  for (int v = 0; v < moved.height(); ++v)
+    for (int u = 0; u < moved.width(); ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * moved.width() + u;
+      if (step.candidate.valid[i]) moved.set(u, v, step.candidate.quadrics[i].cast<float>());
+    }
+  int restored = 0;
+  for (auto _ : state) {
+    state.PauseTiming();
+    jpcr::QuadricMap refined = moved;
+    state.ResumeTiming();
+    restored = jpcr::keep_lower_cost_fits(w.vertices, w.camera, step.candidate.poses, params,
+                                          w.initial, refined);
+    benchmark::DoNotOptimize(refined.quadrics.data());
+  }
+  state.counters["restored"] = restored;
+}
+
+BENCHMARK(BM_KeepLowerCostFits)
+    ->Args({320, 2})
+    ->Args({640, 2})
+    ->Args({320, 5})
+    ->Args({640, 5})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_JointFrameToFrameIteration)
     ->Args({320, 2})
     ->Args({640, 2})
@@ -129,8 +173,12 @@ int main(int argc, char** argv) {
       "Times one Levenberg-Marquardt iteration of J-ftf (M = 2), J-full and Q-full (M = 5) on\n"
       "the CPU: linearise the Schur-reduced system, solve the poses, back-substitute and cost\n"
       "the candidate. room_spheres with 1 % range noise at 320x240 and 640x480, poses 1 cm / 1°\n"
-      "off the truth; J-ftf also with the per-sample reference sums the GPU kernels run. Then\n"
-      "the ratios of the same run: gathered / reference sums (J-ftf), Q-full / J-full.",
+      "off the truth; J-ftf also with the per-sample reference sums the GPU kernels run; and\n"
+      "the pass after the loop that keeps each quadric's lower-cost fit (keep_lower_cost_fit).\n"
+      "Then the ratios of the same run: gathered / reference sums (J-ftf), Q-full / J-full,\n"
+      "that pass / one iteration (J-ftf at M = 2, J-full at M = 5).",
       {{"BM_JointFrameToFrameIteration", "BM_JointFrameToFrameIterationReference"},
-       {"BM_FixedQuadricIteration", "BM_JointWindowIteration"}});
+       {"BM_FixedQuadricIteration", "BM_JointWindowIteration"},
+       {"BM_KeepLowerCostFits", "BM_JointFrameToFrameIteration"},
+       {"BM_KeepLowerCostFits", "BM_JointWindowIteration"}});
 }
