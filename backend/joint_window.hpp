@@ -27,7 +27,9 @@ class JointWindow final : public Refiner {
 /// run_joint_refinement (joint_problem.hpp). estimate_quadrics = false is Q-full. The quadrics
 /// at creases and steps stay out (edge_quadrics, joint_problem.hpp): `edges` where the caller
 /// has them for vertices[0] (an empty vector leaves every quadric in), else (nullptr) computed
-/// here from vertices[0] and params.quadric.normals.
+/// here from vertices[0] and params.quadric.normals. After the loop, with
+/// params.keep_lower_cost_fit, each quadric whose Quad IT start fits the window better gets it
+/// back (keep_lower_cost_fits, lower_cost_fit.hpp).
 RefinementResult refine_window(const std::vector<VertexMap>& vertices,
                                const CameraIntrinsics& camera,
                                const std::vector<Eigen::Isometry3d>& initial_poses,

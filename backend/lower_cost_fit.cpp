@@ -50,6 +50,11 @@ int keep_lower_cost_fits(const std::vector<VertexMap>& vertices, const CameraInt
         // p̄), so both fits see the same samples, gathered about p̄; the gate and n₀ grow with its
         // range. Maps of other origins, whose centres differ, are not compared.
         if (start.center != fit.center) continue;
+        // A quadric the loop left out or never moved (edge_tilt, no other frame saw it) keeps its
+        // start to the bit: nothing to compare.
+        if (start.R == fit.R && start.t_z == fit.t_z && start.a == fit.a && start.b == fit.b &&
+            start.c == fit.c)
+          continue;
         const SampleGate<double> limits = SampleGate<double>::at(terms.fit, fit.center);
         double start_cost = 0.0, fit_cost = 0.0;
         for (int j = 0; j < frames; ++j) {

@@ -1,5 +1,5 @@
-// Quad IT's step test over a whole window, applied to the joint refiners' quadrics after their
-// loop (JointParams::keep_lower_cost_fit).
+// The cost half of Quad IT's step test, over a whole window, applied to the joint refiners'
+// quadrics after their loop (JointParams::keep_lower_cost_fit).
 //
 // The joint loop (run_joint_refinement) accepts a step when the window's total cost falls, so a
 // single quadric may end with a higher cost of its own than its Quad IT start: its step is part
@@ -8,20 +8,21 @@
 // (NormalEquations6::gated, quadric_fit_kernel.hpp). Here, with the refined poses fixed, each
 // quadric keeps whichever of its refined and initial fits has the lower such cost over the
 // window's samples (frame 1's pattern and each other frame's where its centre projects, as
-// associate() places it; min_frame_terms is not applied, both fits see the same samples). That
-// cost is a sum over quadrics, so at the refined poses it can only fall; the poses do not change.
-// It is not the loop's cost (whose weights are held at a linearisation): the report's cost,
-// residual variance and covariance stay those of the loop. A refined quadric that refined_map
-// marked kTooFewSamples stays so.
+// associate() places it). That cost is a sum over quadrics, so at the refined poses it can only
+// fall; the poses do not change. It is not quite the loop's cost, which counts only the active
+// quadrics and, for each, only the frames with min_frame_terms terms: so the report's cost,
+// residual variance and covariance stay those of the loop. The other half of Quad IT's test (a
+// step that leaves fewer than min_samples inliers is undone) is refined_map's: such a refined
+// quadric is reported kTooFewSamples, and stays so here.
 //
-// Measured: see README ("After the loop, each quadric keeps the lower-cost fit"). On the
-// report's 640x480 4-frame walks under 1 % range noise (J-ftf from ICP-ftf, the report's pose
-// parameters; frames 0-2 against the ground truth, RMS 1/m, all pixels / interior) 4-8 k of
-// about 300 k quadrics per pair go back to Quad IT: cylinders_boxes 4.93 → 4.82 / 2.59 → 2.51,
-// torus_saddle 4.23 → 4.09 / 2.81 → 2.77, room_spheres 3.63 → 3.54 / 2.76 → 2.71. Those it
-// restores lie in bands along creases, where the joint optimum bends the quadric towards the
-// other face (a large saddle); Quad IT's three steps stop short of that (with 20 steps its
-// error there rises too).
+// Measured: README ("After the loop, each quadric keeps the lower-cost fit"). On the report's
+// 640x480 4-frame walks under 1 % range noise (J-ftf from ICP-ftf, the report's pose
+// parameters; frames 0-2 against the ground truth, RMS 1/m, all pixels / interior) 3.8-8.4 k of
+// about 300 k quadrics per pair go back to Quad IT: cylinders_boxes 4.934 → 4.816 / 2.593 →
+// 2.508, torus_saddle 4.225 → 4.095 / 2.808 → 2.774, room_spheres 3.626 → 3.538 / 2.759 →
+// 2.713. Where J-ftf was worst against Quad IT, in bands along creases, its quadrics were large
+// saddles: the loop's 7-13 steps bend them towards the other face, which Quad IT's three steps
+// stop short of (with 20 steps Quad IT's error there rises too).
 #pragma once
 
 #include <vector>

@@ -572,12 +572,17 @@ RefinementResult CudaJointFrameToFrame::refine(const std::vector<VertexMap>& ver
                                                const QuadricMap& initial_quadrics) const {
   if (vertices.size() != 2) throw std::invalid_argument("j-ftf: needs exactly two frames");
   check_joint_inputs(vertices, camera, initial_poses, initial_quadrics);
-  std::lock_guard<std::mutex> lock(mutex_);
-  const std::vector<unsigned char> edges = edge_quadrics(vertices[0], params_);  // on the host
-  const int left_out = system_->load(vertices, camera, params_.quadric.pattern_for(camera.width),
-                                     initial_poses, initial_quadrics, edges);
-  RefinementResult result =
-      run_joint_refinement(*system_, params_, true, name(), initial_quadrics, vertices[0]);
+  // The host's work before and after the loop touches no device state: only the loop holds the
+  // lock, so another thread's pair can use the device meanwhile.
+  const std::vector<unsigned char> edges = edge_quadrics(vertices[0], params_);
+  int left_out = 0;
+  RefinementResult result;
+  {
+    std::lock_guard<std::mutex> lock(mutex_);
+    left_out = system_->load(vertices, camera, params_.quadric.pattern_for(camera.width),
+                             initial_poses, initial_quadrics, edges);
+    result = run_joint_refinement(*system_, params_, true, name(), initial_quadrics, vertices[0]);
+  }
   result.report.device = "cuda";
   result.report.edge_quadrics = left_out;
   if (params_.keep_lower_cost_fit && result.report.iterations > 0)  // on the host, as the CPU

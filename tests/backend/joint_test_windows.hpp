@@ -81,7 +81,6 @@ inline bool bitwise_equal(const Eigen::Isometry3d& a, const Eigen::Isometry3d& b
   return std::memcmp(a.matrix().data(), b.matrix().data(), 16 * sizeof(double)) == 0;
 }
 
-/// One line per refinement: verdict, steps, what took part, the cost history.
 /// The same status at pixel (u, v) and, where valid, the same fit to the bit: quadric,
 /// curvature and direction (an invalid pixel's curvature is NaN, so only its status counts).
 inline bool same_fit(const QuadricMap& a, const QuadricMap& b, int u, int v) {
@@ -93,6 +92,7 @@ inline bool same_fit(const QuadricMap& a, const QuadricMap& b, int u, int v) {
          a.direction(u, v) == b.direction(u, v);
 }
 
+/// One line per refinement: verdict, steps, what took part, the cost history.
 inline void print_report(const RefinementReport& r) {
   std::printf("%s: %s after %d steps (%d rejected), %d quadrics, %ld terms, cost", r.method.c_str(),
               to_string(r.verdict), r.iterations, r.rejected_steps, r.active_quadrics, r.terms);

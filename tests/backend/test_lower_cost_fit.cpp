@@ -125,16 +125,15 @@ TEST(LowerCostFit, DecidesAsTheReferenceSumsOverEveryFrame) {
         if (j > 0) {
           if (!associate(a.center, T, view, projection, terms, su, sv)) continue;
           ++other_frames;
-        } else {
-          frame_1_a = frame_cost(a, a, view, T, T, pattern.offsets.data(),
-                                 static_cast<int>(pattern.size()), su, sv, limits, count);
-          frame_1_b = frame_cost(b, b, view, T, T, pattern.offsets.data(),
-                                 static_cast<int>(pattern.size()), su, sv, limits, count);
         }
         cost_a += frame_cost(a, a, view, T, T, pattern.offsets.data(),
                              static_cast<int>(pattern.size()), su, sv, limits, count);
         cost_b += frame_cost(b, b, view, T, T, pattern.offsets.data(),
                              static_cast<int>(pattern.size()), su, sv, limits, count);
+        if (j == 0) {
+          frame_1_a = cost_a;
+          frame_1_b = cost_b;
+        }
       }
       const bool took_start = test::same_fit(kept, start, u, v);
       ++decided;
