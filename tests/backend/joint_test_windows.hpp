@@ -13,6 +13,7 @@
 #include "jpcr/backend/joint_pixel_kernel.hpp"
 #include "jpcr/backend/refiner.hpp"
 #include "jpcr/io/synthetic_scene.hpp"
+#include "jpcr/io/synthetic_sequence.hpp"
 #include "jpcr/quadric/se3.hpp"
 
 namespace jpcr::test {
@@ -44,6 +45,21 @@ inline JointTestWindow render_window(int count, int width, const std::string& no
   }
   w.truth[0] = Eigen::Isometry3d::Identity();
   return w;
+}
+
+/// The first `frames` frames of a walk through `scene_name` (jpcr_synth --trajectory walk) at
+/// `width` x 3/4 width, with `noise` ("none", "range:K", "kinect") drawn from `seed`, which also
+/// makes the walk.
+inline SyntheticSequence walk(const std::string& scene_name, const std::string& noise,
+                              std::uint64_t seed, int width, int frames = 2) {
+  SyntheticSequenceOptions o;
+  o.scene = scene_name;
+  o.frames = frames;
+  o.noise = noise;
+  o.width = width;
+  o.height = width * 3 / 4;
+  o.seed = seed;
+  return make_synthetic_sequence(o);
 }
 
 /// exp(δ) T with δ of `metres` translation and `degrees` rotation about fixed skew axes, the

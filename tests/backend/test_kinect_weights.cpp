@@ -9,6 +9,7 @@
 // below, (0, 1): 2.02 mm against 0.22 mm. The bounds leave 2x margins on both sides.
 #include <gtest/gtest.h>
 
+#include "joint_test_windows.hpp"
 #include "jpcr/backend/refiner.hpp"
 #include "jpcr/io/params.hpp"
 #include "jpcr/io/synthetic_sequence.hpp"
@@ -27,14 +28,7 @@ double translation_error_from_truth(const JointParams& params, const SyntheticSe
 }
 
 TEST(KinectWeights, KinectFarRemovesTheBiasOfTheBuiltInWeights) {
-  SyntheticSequenceOptions o;
-  o.scene = "room_spheres";
-  o.frames = 2;
-  o.noise = "kinect";
-  o.width = 320;
-  o.height = 240;
-  o.seed = 4;
-  const SyntheticSequence seq = make_synthetic_sequence(o);
+  const SyntheticSequence seq = test::walk("room_spheres", "kinect", 4, 320);
 
   const double built_in = translation_error_from_truth(JointParams{}, seq);
   const Params far = load_params(std::string(JPCR_SOURCE_DIR) + "/configs/kinect_far.yaml");

@@ -1,6 +1,6 @@
-// keep_lower_cost_fits (backend/lower_cost_fit.hpp): Quad IT's step test per quadric over the
-// window, after the joint loop. It restores exactly the fits its start beats, over every frame of
-// the window; test_lower_cost_fit_refiners.cpp runs it inside the refiners.
+// keep_lower_cost_fits (backend/lower_cost_fit.hpp): the cost half of Quad IT's step test, per
+// quadric over the window, after the joint loop. It restores exactly the fits its start beats, over
+// every frame of the window; test_lower_cost_fit_refiners.cpp runs it inside the refiners.
 #include <cmath>
 #include <cstdio>
 #include <random>

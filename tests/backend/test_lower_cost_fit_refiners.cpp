@@ -39,12 +39,7 @@ double rms_curvature_error(const QuadricMap& map, const CurvatureImage& truth) {
 // J-ftf 4.278, with the test 4.013 1/m (8685 quadrics restored; cylinders_boxes 4.967 → 4.797,
 // room_spheres 3.732 → 3.553). The bound asks for 2 % less.
 TEST(LowerCostFit, LowersJftfsCurvatureErrorUnderRangeNoise) {
-  SyntheticSequenceOptions o;
-  o.scene = "torus_saddle";
-  o.frames = 2;
-  o.noise = "range:1";
-  o.seed = 1;
-  const SyntheticSequence walk = make_synthetic_sequence(o);
+  const SyntheticSequence walk = test::walk("torus_saddle", "range:1", 1, 640);
   const SyntheticFrame first = walk.render(0);
   const std::vector<VertexMap> vertices = {compute_vertex_map(first.frame.depth, walk.camera()),
                                            compute_vertex_map(walk.load(1).depth, walk.camera())};
