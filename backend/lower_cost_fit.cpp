@@ -43,7 +43,18 @@ int keep_lower_cost_fits(const std::vector<VertexMap>& vertices, const CameraInt
 #pragma omp for schedule(dynamic, 8)
     for (int v = 0; v < height; ++v)
       for (int u = 0; u < width; ++u) {
-        if (!refined.valid(u, v) || !initial.valid(u, v)) continue;
+        if (!initial.valid(u, v)) continue;
+        if (!refined.valid(u, v)) {
+          // The other half of Quad IT's step test: a step that leaves fewer than min_samples
+          // inliers of frame 1 is undone (refined_map marks such a fit kTooFewSamples; its
+          // quadric is cleared, so there is no centre to compare).
+          if (refined.status(u, v) == QuadricStatus::kTooFewSamples) {
+            refined.set(u, v, initial.quadrics(u, v), initial.curvature(u, v),
+                        initial.direction(u, v));
+            ++restored;
+          }
+          continue;
+        }
         const Quadricd start = initial.quadrics(u, v).cast<double>();
         const Quadricd fit = refined.quadrics(u, v).cast<double>();
         // The centre p̄ is the pixel's vertex in both (the joint step moves R, t_z, a, b, c, not

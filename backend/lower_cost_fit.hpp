@@ -11,9 +11,10 @@
 // associate() places it). That cost is a sum over quadrics, so at the refined poses it can only
 // fall; the poses do not change. It is not quite the loop's cost, which counts only the active
 // quadrics and, for each, only the frames with min_frame_terms terms: so the report's cost,
-// residual variance and covariance stay those of the loop. The other half of Quad IT's test (a
-// step that leaves fewer than min_samples inliers is undone) is refined_map's: such a refined
-// quadric is reported kTooFewSamples, and stays so here.
+// residual variance and covariance stay those of the loop. The other half of Quad IT's test, a
+// step that leaves fewer than min_samples inliers is undone, is applied here too: where
+// refined_map marked the refined quadric kTooFewSamples (fewer inliers of frame 1's samples),
+// the start comes back, so the refiners return a curvature wherever Quad IT did.
 //
 // Measured: README ("After the loop, each quadric keeps the lower-cost fit"). On the report's
 // 640x480 4-frame walks under 1 % range noise (J-ftf from ICP-ftf, the report's pose
@@ -39,9 +40,10 @@ namespace jpcr {
 /// Where both maps hold a valid quadric with the same centre and `initial`'s has the strictly
 /// lower gated cost over the window (frame 1's samples around its pixel and each other frame's
 /// around the projection of its centre at `poses`, with the weight n₀ and the gate of
-/// params.quadric.fit), `refined` takes the initial quadric, curvature and direction. Returns how
-/// many it took. `poses` are T_1 (taken as I), T_2 … T_M (frame j → frame 1). Throws
-/// std::invalid_argument on counts or sizes that differ (frames, maps, camera).
+/// params.quadric.fit), `refined` takes the initial quadric, curvature and direction; so it does
+/// where `refined` is kTooFewSamples and `initial` valid. Returns how many it took. `poses` are T_1
+/// (taken as I), T_2 … T_M (frame j → frame 1). Throws std::invalid_argument on counts or sizes
+/// that differ (frames, maps, camera).
 int keep_lower_cost_fits(const std::vector<VertexMap>& vertices, const CameraIntrinsics& camera,
                          const std::vector<Eigen::Isometry3d>& poses, const JointParams& params,
                          const QuadricMap& initial, QuadricMap& refined);

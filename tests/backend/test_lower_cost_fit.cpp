@@ -63,6 +63,45 @@ TEST(LowerCostFit, RestoresExactlyTheStartsThatFitTheWindowBetter) {
     }
 }
 
+// The other half of Quad IT's step test: where refined_map marked the refined fit
+// kTooFewSamples (its step left fewer than min_samples inliers of frame 1), the start comes back
+// and is counted; a fit invalid for another reason, or whose start is invalid, stays as it is.
+TEST(LowerCostFit, RestoresTheStartWhereTheRefinedFitKeptTooFewSamples) {
+  const JointTestWindow w = render_window(2, 160);
+  const JointParams params;
+  const QuadricMap start = QuadricFit(params.quadric).estimate(w.vertices[0]);
+  QuadricMap refined = start;
+  int too_few = 0, singular = 0, no_start = 0;
+  for (int v = 0; v < start.height(); ++v)
+    for (int u = 0; u < start.width(); ++u) {
+      const int k = v * start.width() + u;
+      if (!start.valid(u, v)) {
+        if (k % 2 == 0) {  // a start without a fit has nothing to give back
+          refined.set_invalid(u, v, QuadricStatus::kTooFewSamples);
+          ++no_start;
+        }
+      } else if (k % 5 == 0) {
+        refined.set_invalid(u, v, QuadricStatus::kTooFewSamples);
+        ++too_few;
+      } else if (k % 5 == 1) {
+        refined.set_invalid(u, v, QuadricStatus::kSingular);
+        ++singular;
+      }
+    }
+  ASSERT_GT(too_few, 1000);
+  ASSERT_GT(no_start, 10);
+  const QuadricMap before = refined;
+  const int restored = keep_lower_cost_fits(w.vertices, w.camera, w.truth, params, start, refined);
+  std::printf("%d of %d too-few fits restored (%d singular, %d without a start kept)\n", restored,
+              too_few, singular, no_start);
+  EXPECT_EQ(restored, too_few);
+  for (int v = 0; v < start.height(); ++v)
+    for (int u = 0; u < start.width(); ++u) {
+      const bool back = start.valid(u, v) && (v * start.width() + u) % 5 == 0;
+      ASSERT_TRUE(test::same_fit(refined, back ? start : before, u, v)) << u << "," << v;
+    }
+}
+
 TEST(LowerCostFit, ChecksTheSizes) {
   const JointTestWindow w = render_window(2, 160);
   const JointParams params;
