@@ -56,7 +56,8 @@ BENCHMARK(BM_WriteSequence)->DenseRange(0, 3)->Unit(benchmark::kMillisecond)->Us
 int main(int argc, char** argv) {
   return jpcr::bench::benchmark_main(
       argc, argv, "bench_synthetic",
-      "Times the synthetic generator on each of the four scenes (640x480): ray-tracing one\n"
-      "frame with 1 % range noise and ground truth (BM_Render), and writing a 10-frame\n"
-      "sequence as jpcr_synth does (BM_WriteSequence, in full builds).");
+      "Times the synthetic generator on four of the built-in scenes (room_spheres,\n"
+      "cylinders_boxes, torus_saddle, rail_wall; 640x480): ray-tracing one frame with\n"
+      "1 % range noise and ground truth (BM_Render), and writing a 10-frame sequence as\n"
+      "jpcr_synth does (BM_WriteSequence, in full builds).");
 }
