@@ -72,7 +72,8 @@ struct RefinementReport {
   int edge_quadrics = 0;           // valid quadrics left out at creases and steps, keeping
                                    // their Quad IT fit (JointParams::edge_tilt)
   int quad_it_fits_restored = 0;   // refined quadrics whose Quad IT start had the lower gated
-                                   // cost at the refined poses (keep_lower_cost_fit)
+                                   // cost at the refined poses, or that kept too few samples
+                                   // (keep_lower_cost_fit)
   std::vector<int> seen;           // per pose T_2 … T_M: active quadrics that frame sees;
                                    // icp-bundle: residuals that involve the frame
   long terms = 0;                  // residual terms inside the gate at the end
