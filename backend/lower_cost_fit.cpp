@@ -37,6 +37,9 @@ int keep_lower_cost_fits(const std::vector<VertexMap>& vertices, const CameraInt
     motions[static_cast<std::size_t>(j)].t = poses[static_cast<std::size_t>(j)].translation();
   }
   int restored = 0;
+  const auto restore = [&initial, &refined](int u, int v) {
+    refined.set(u, v, initial.quadrics(u, v), initial.curvature(u, v), initial.direction(u, v));
+  };
 #pragma omp parallel reduction(+ : restored)
   {
     GatheredFrameTerms<float> gathered(pattern_size);
@@ -49,8 +52,7 @@ int keep_lower_cost_fits(const std::vector<VertexMap>& vertices, const CameraInt
           // inliers of frame 1 is undone (refined_map marks such a fit kTooFewSamples; its
           // quadric is cleared, so there is no centre to compare).
           if (refined.status(u, v) == QuadricStatus::kTooFewSamples) {
-            refined.set(u, v, initial.quadrics(u, v), initial.curvature(u, v),
-                        initial.direction(u, v));
+            restore(u, v);
             ++restored;
           }
           continue;
@@ -80,8 +82,7 @@ int keep_lower_cost_fits(const std::vector<VertexMap>& vertices, const CameraInt
           fit_cost += gathered.cost(fit, limits, count);
         }
         if (start_cost < fit_cost) {
-          refined.set(u, v, initial.quadrics(u, v), initial.curvature(u, v),
-                      initial.direction(u, v));
+          restore(u, v);
           ++restored;
         }
       }
