@@ -16,8 +16,8 @@
 // refined_map marked the refined quadric kTooFewSamples (fewer inliers of frame 1's samples),
 // the start comes back, so the refiners return a curvature wherever Quad IT did.
 //
-// Measured: README ("After the loop, each quadric keeps the lower-cost fit"). On the report's
-// 640x480 4-frame walks under 1 % range noise (J-ftf from ICP-ftf, the report's pose
+// Measured: docs/findings.md ("After the loop, each quadric keeps the lower-cost fit"). On the
+// report's 640x480 4-frame walks under 1 % range noise (J-ftf from ICP-ftf, the report's pose
 // parameters; frames 0-2 against the ground truth, RMS 1/m, all pixels / interior) 3.8-8.4 k of
 // about 300 k quadrics per pair go back to Quad IT: cylinders_boxes 4.934 → 4.816 / 2.593 →
 // 2.508, torus_saddle 4.225 → 4.095 / 2.808 → 2.774, room_spheres 3.626 → 3.538 / 2.759 →

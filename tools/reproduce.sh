@@ -200,8 +200,8 @@ for scene in room_spheres cylinders_boxes torus_saddle; do
 done
 
 # 1c. Not in the paper: J-ftf's, Q-full's and the peer ICP-ftf's bias and spread over noise draws
-# on the first step of the room_spheres walk (jpcr_eval noise, README "Under heavy range noise
-# J-ftf shortens the step"), with the step's motion and with both frames at one pose.
+# on the first step of the room_spheres walk (jpcr_eval noise, docs/findings.md "Under heavy range
+# noise J-ftf shortens the step"), with the step's motion and with both frames at one pose.
 study_run() {  # out-name jpcr_eval-noise-options...
   local name=$1; shift
   [[ -s $name.json ]] && return 0

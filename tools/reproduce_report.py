@@ -479,8 +479,8 @@ def main():
           f"±{100 / np.sqrt(6 * steps):.0f} % around the predicted one (1 / √(2 · 3 · steps) for "
           "Gaussian errors in three axes). To first order the method predicts the same spread "
           "for both: with a free quadric per pixel, a pose step is fixed by the two frames it "
-          "joins, and the window's other frames add curvature, not pose (README, \"J-full and "
-          "J-ftf\").\n")
+          "joins, and the window's other frames add curvature, not pose (docs/findings.md, "
+          "\"J-full and J-ftf\").\n")
         w("| scene | noise | J-ftf t measured | J-ftf t predicted | J-full t measured | "
           "J-full t predicted | J-full / J-ftf predicted, t | r |")
         w("|---|---|---|---|---|---|---|---|")
