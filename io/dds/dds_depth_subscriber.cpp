@@ -9,6 +9,8 @@
 #include <utility>
 #include <vector>
 
+#include <dds/ddsi/ddsi_serdata.h>
+
 #include "jpcr/io/dds/ros_messages.hpp"
 #include "jpcr/quadric/error.hpp"
 
@@ -216,12 +218,38 @@ DdsDepthSubscriber::DdsDepthSubscriber(const DdsParticipant& participant, const 
 
 DdsDepthSubscriber::~DdsDepthSubscriber() = default;
 
+namespace {
+
+// KEEP_ALL: the depth samples still in the reader (at most its resource limit, `limit`), which
+// take_waiting_depth has not taken yet. Read as serialised data, not decoded: marking them read
+// changes nothing, since take takes read and unread samples alike.
+std::size_t samples_in_reader(dds_entity_t reader, std::size_t limit) {
+  std::vector<ddsi_serdata*> data(limit, nullptr);
+  std::vector<dds_sample_info_t> infos(limit);
+  const dds_return_t n =
+      dds_readcdr(reader, data.data(), static_cast<uint32_t>(limit), infos.data(), DDS_ANY_STATE);
+  std::size_t valid = 0;
+  for (dds_return_t i = 0; i < n; ++i) {
+    if (infos[static_cast<std::size_t>(i)].valid_data) ++valid;
+    if (data[static_cast<std::size_t>(i)] != nullptr)
+      ddsi_serdata_unref(data[static_cast<std::size_t>(i)]);
+  }
+  return valid;
+}
+
+}  // namespace
+
 std::size_t DdsDepthSubscriber::frames_waiting() const {
   State& s = *state_;
-  const std::lock_guard<std::mutex> lock(s.mutex);
-  return s.frames.size() + static_cast<std::size_t>(std::count_if(
-                               s.images.begin(), s.images.end(),
-                               [](const ReceivedImage& r) { return r.problem.empty(); }));
+  std::size_t waiting = 0;
+  {
+    const std::lock_guard<std::mutex> lock(s.mutex);
+    waiting = s.frames.size() + static_cast<std::size_t>(std::count_if(
+                                    s.images.begin(), s.images.end(),
+                                    [](const ReceivedImage& r) { return r.problem.empty(); }));
+  }
+  if (s.keep_all) waiting += samples_in_reader(s.depth.handle(), s.queue_depth);
+  return waiting;
 }
 
 int DdsDepthSubscriber::matched() const {

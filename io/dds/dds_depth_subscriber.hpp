@@ -66,7 +66,7 @@ class DdsDepthSubscriber {
   std::size_t frames_dropped() const;
   /// Frames received and not yet returned by wait_frame (at a stop: left unprocessed). On the
   /// caller's thread, as wait_frame: at most twice image_history_depth (decoded ones waiting,
-  /// and those the listener queued since).
+  /// and those the listener queued since; with input_keep_all, those still in the reader).
   std::size_t frames_waiting() const;
   /// Publishers matched on the depth topic.
   int matched() const;

@@ -365,6 +365,24 @@ TEST_F(DdsDepth, FramesWaitingForASlowCallerStayWithinTheQueue) {
   EXPECT_DOUBLE_EQ(left.back(), 2.0 * kRounds) << "the oldest go, the newest stays";
 }
 
+// With dds.input_history: keep_all the images wait in the reader until the caller asks for a
+// frame: they are frames waiting too (a stop reports them as left unprocessed), and they are
+// counted without being taken.
+TEST_F(DdsDepth, FramesWaitingCountsTheImagesAKeepAllReaderStillHolds) {
+  config_.input_keep_all = true;
+  ASSERT_EQ(config_.image_history_depth, 2);
+  std::ostringstream log;
+  DdsDepthSubscriber subscriber(node_side_, config_, &log);
+  DdsDepthPublisher publisher(camera_side_, config_, DepthEncoding::kMetres32);
+  ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
+  publish_acknowledged(publisher, 1.0, 2);
+  EXPECT_EQ(subscriber.frames_waiting(), 2u);  // without the reader's count: 0
+  EXPECT_EQ(subscriber.frames_waiting(), 2u) << "counting takes nothing";
+  EXPECT_EQ(drain(subscriber), (std::vector<double>{1.0, 2.0}));
+  EXPECT_EQ(subscriber.frames_waiting(), 0u);
+  EXPECT_EQ(subscriber.frames_dropped(), 0u) << log.str();
+}
+
 // A keep_all caller cannot hold a KEEP_LAST camera back, and the frames that camera loses are
 // not reported by Cyclone: the subscriber says so once the camera matches, and not for a
 // KEEP_ALL one.
