@@ -32,8 +32,9 @@ class DeviceScope {
       cudaGetLastError();
       return;
     }
-    if (previous_ != device) switched_ = cudaSetDevice(device) == cudaSuccess;
-    if (!switched_) cudaGetLastError();
+    if (previous_ == device) return;
+    switched_ = cudaSetDevice(device) == cudaSuccess;
+    if (!switched_) cudaGetLastError();  // only this call's error: one pending stays pending
   }
   ~DeviceScope() {
     if (switched_ && cudaSetDevice(previous_) != cudaSuccess) cudaGetLastError();
@@ -103,9 +104,10 @@ struct StreamEvents {
  private:
   void destroy() noexcept {
     const DeviceScope scope(device, std::nothrow);
+    // A failure is cleared here, so that no later launch check is blamed for it.
     for (cudaEvent_t& e : events)
-      if (e != nullptr) cudaEventDestroy(e);
-    if (stream != nullptr) cudaStreamDestroy(stream);
+      if (e != nullptr && cudaEventDestroy(e) != cudaSuccess) cudaGetLastError();
+    if (stream != nullptr && cudaStreamDestroy(stream) != cudaSuccess) cudaGetLastError();
   }
 };
 
