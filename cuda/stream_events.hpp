@@ -34,7 +34,7 @@ class DeviceScope {
     }
     if (previous_ == device) return;
     switched_ = cudaSetDevice(device) == cudaSuccess;
-    if (!switched_) cudaGetLastError();  // only this call's error: one pending stays pending
+    if (!switched_) cudaGetLastError();  // the failed switch's error; none is cleared otherwise
   }
   ~DeviceScope() {
     if (switched_ && cudaSetDevice(previous_) != cudaSuccess) cudaGetLastError();

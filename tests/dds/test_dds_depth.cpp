@@ -365,24 +365,6 @@ TEST_F(DdsDepth, FramesWaitingForASlowCallerStayWithinTheQueue) {
   EXPECT_DOUBLE_EQ(left.back(), 2.0 * kRounds) << "the oldest go, the newest stays";
 }
 
-// With dds.input_history: keep_all the images wait in the reader until the caller asks for a
-// frame: they are frames waiting too (a stop reports them as left unprocessed), and they are
-// counted without being taken.
-TEST_F(DdsDepth, FramesWaitingCountsTheImagesAKeepAllReaderStillHolds) {
-  config_.input_keep_all = true;
-  ASSERT_EQ(config_.image_history_depth, 2);
-  std::ostringstream log;
-  DdsDepthSubscriber subscriber(node_side_, config_, &log);
-  DdsDepthPublisher publisher(camera_side_, config_, DepthEncoding::kMetres32);
-  ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
-  publish_acknowledged(publisher, 1.0, 2);
-  EXPECT_EQ(subscriber.frames_waiting(), 2u);  // without the reader's count: 0
-  EXPECT_EQ(subscriber.frames_waiting(), 2u) << "counting takes nothing";
-  EXPECT_EQ(drain(subscriber), (std::vector<double>{1.0, 2.0}));
-  EXPECT_EQ(subscriber.frames_waiting(), 0u);
-  EXPECT_EQ(subscriber.frames_dropped(), 0u) << log.str();
-}
-
 // A keep_all caller cannot hold a KEEP_LAST camera back, and the frames that camera loses are
 // not reported by Cyclone: the subscriber says so once the camera matches, and not for a
 // KEEP_ALL one.
@@ -403,22 +385,45 @@ TEST_F(DdsDepth, AKeepAllCallerNamesAKeepLastCamera) {
   }
 }
 
-// dds.input_history: keep_all on both sides: a camera publishing as fast as it can to a caller
-// that takes a frame every 30 ms waits for it, and every frame arrives, in order, none dropped.
-TEST_F(DdsDepth, AKeepAllCameraWaitsForASlowCallerAndNothingIsDropped) {
-  config_.input_keep_all = true;
-  ASSERT_EQ(config_.image_history_depth, 2);
-  std::ostringstream log;
-  DdsDepthSubscriber subscriber(node_side_, config_, &log);
-  DdsDepthPublisher publisher(camera_side_, config_, DepthEncoding::kMetres32);
-  ASSERT_TRUE(publisher.wait_for_subscribers(1, kTimeout));
+// dds.input_history: keep_all on both sides (a reader's resource limit of image_history_depth = 2
+// images): the subscriber and the camera, matched.
+class DdsDepthKeepAll : public DdsDepth {
+ protected:
+  static const DdsConfig& keeping_all(DdsConfig& config) {
+    config.input_keep_all = true;
+    return config;
+  }
+  void SetUp() override {
+    ASSERT_EQ(config_.image_history_depth, 2);
+    ASSERT_TRUE(publisher_.wait_for_subscribers(1, kTimeout));
+  }
+  std::ostringstream log_;
+  DdsDepthSubscriber subscriber_{node_side_, keeping_all(config_), &log_};
+  DdsDepthPublisher publisher_{camera_side_, config_, DepthEncoding::kMetres32};
+};
+
+// With dds.input_history: keep_all the images wait in the reader until the caller asks for a
+// frame: they are frames waiting too (a stop reports them as left unprocessed), and they are
+// counted without being taken.
+TEST_F(DdsDepthKeepAll, FramesWaitingCountsTheImagesTheReaderStillHolds) {
+  publish_acknowledged(publisher_, 1.0, 2);
+  EXPECT_EQ(subscriber_.frames_waiting(), 2u);  // without the reader's count: 0
+  EXPECT_EQ(subscriber_.frames_waiting(), 2u) << "counting takes nothing";
+  EXPECT_EQ(drain(subscriber_), (std::vector<double>{1.0, 2.0}));
+  EXPECT_EQ(subscriber_.frames_waiting(), 0u);
+  EXPECT_EQ(subscriber_.frames_dropped(), 0u) << log_.str();
+}
+
+// A camera publishing as fast as it can to a caller that takes a frame every 30 ms waits for it,
+// and every frame arrives, in order, none dropped.
+TEST_F(DdsDepthKeepAll, ACameraWaitsForASlowCallerAndNothingIsDropped) {
   constexpr int kFrames = 12;
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
   std::atomic<int> written{0};
   std::thread camera([&] {
     for (int i = 0; i < kFrames; ++i) {
-      if (!publisher.publish(test_frame(1.0 + i),
-                             [&] { return std::chrono::steady_clock::now() < give_up; }))
+      if (!publisher_.publish(test_frame(1.0 + i),
+                              [&] { return std::chrono::steady_clock::now() < give_up; }))
         return;
       ++written;
     }
@@ -426,7 +431,7 @@ TEST_F(DdsDepth, AKeepAllCameraWaitsForASlowCallerAndNothingIsDropped) {
   std::vector<double> stamps;
   while (stamps.size() < std::size_t{kFrames} && std::chrono::steady_clock::now() < give_up) {
     std::this_thread::sleep_for(milliseconds(30));  // the node at work
-    if (const std::optional<Frame> f = subscriber.wait_frame(milliseconds(500)))
+    if (const std::optional<Frame> f = subscriber_.wait_frame(milliseconds(500)))
       stamps.push_back(f->timestamp);
     // Held back, not queued without bound: at most the writer's 2 unacknowledged images, the
     // reader's 2 and the subscriber's 2 (unlimited, the camera ran 11 ahead at once).
@@ -438,9 +443,9 @@ TEST_F(DdsDepth, AKeepAllCameraWaitsForASlowCallerAndNothingIsDropped) {
   for (int i = 0; i < kFrames; ++i)
     expected.push_back(1.0 + i);
   EXPECT_EQ(stamps, expected);
-  EXPECT_EQ(subscriber.frames_dropped(), 0u) << log.str();
-  EXPECT_EQ(subscriber.frames_received(), std::size_t{kFrames});
-  EXPECT_EQ(log.str().find("dropped"), std::string::npos) << log.str();
+  EXPECT_EQ(subscriber_.frames_dropped(), 0u) << log_.str();
+  EXPECT_EQ(subscriber_.frames_received(), std::size_t{kFrames});
+  EXPECT_EQ(log_.str().find("dropped"), std::string::npos) << log_.str();
 }
 
 }  // namespace
