@@ -31,7 +31,8 @@ inline int benchmark_main(int argc, char** argv, const char* name, const char* d
           "documentation has the rest):\n"
           "  --benchmark_filter=REGEX        run only the benchmarks whose name matches\n"
           "  --benchmark_repetitions=N       repeat each N times; the ratios use the median\n"
-          "  --benchmark_min_time=Xs         run each for at least X seconds\n"
+          "  --benchmark_min_time=X          run each for at least X seconds (a plain number:\n"
+          "                                  Debian 12's library 1.7 takes no unit suffix)\n"
           "  --benchmark_format=console|json|csv  output format (the ratios need console)\n"
           "  --benchmark_out=FILE            also write the results to FILE\n",
           name, description);
