@@ -49,12 +49,17 @@ CurvatureErrorAccumulator::CurvatureErrorAccumulator(int support_radius)
                      " pixels, got " + std::to_string(support_radius));
 }
 
-void CurvatureErrorAccumulator::add(const CurvatureImage& gt, const CurvatureImage& est) {
+void CurvatureErrorAccumulator::add(const CurvatureImage& gt, const CurvatureImage& est,
+                                    const Image<float>* sd) {
   if (gt.width() != est.width() || gt.height() != est.height()) {
     throw InputError("curvature maps differ in size: ground truth " + std::to_string(gt.width()) +
                      "x" + std::to_string(gt.height()) + ", estimate " +
                      std::to_string(est.width()) + "x" + std::to_string(est.height()));
   }
+  if (sd && (sd->width() != est.width() || sd->height() != est.height()))
+    throw InputError("the sd map is " + std::to_string(sd->width()) + "x" +
+                     std::to_string(sd->height()) + " but its curvature map is " +
+                     std::to_string(est.width()) + "x" + std::to_string(est.height()));
   const Image<unsigned char> interior =
       support_radius_ > 0 ? interior_mask(gt, support_radius_) : Image<unsigned char>();
   for (std::size_t i = 0; i < gt.size(); ++i) {
@@ -67,6 +72,14 @@ void CurvatureErrorAccumulator::add(const CurvatureImage& gt, const CurvatureIma
     add_abs_error(std::abs(d1));
     add_abs_error(std::abs(d2));
     ++compared_;
+    // A negative sd is no spread: the pixel is left out like a NaN one.
+    if (sd && std::isfinite((*sd)[i]) && (*sd)[i] >= 0.0f) {
+      const double s = (*sd)[i], e2 = (d1 * d1 + d2 * d2) / 2.0;
+      sum_sd2_ += s * s;
+      sum_e2_where_sd_ += e2;
+      within_2sd_ += e2 < 4.0 * s * s ? 1 : 0;
+      ++sd_compared_;
+    }
   }
   ++frames_;
 }
@@ -92,6 +105,12 @@ CurvatureErrors CurvatureErrorAccumulator::result() const {
   r.compared = compared_;
   r.gt_valid = gt_valid_;
   r.coverage = gt_valid_ ? double(compared_) / gt_valid_ : 0.0;
+  r.sd_compared = sd_compared_;
+  if (sd_compared_ > 0) {
+    r.sd_rms = std::sqrt(sum_sd2_ / double(sd_compared_));
+    r.rms_where_sd = std::sqrt(sum_e2_where_sd_ / double(sd_compared_));
+    r.within_2sd = double(within_2sd_) / double(sd_compared_);
+  }
   if (compared_ == 0) {
     r.rms_k1 = r.rms_k2 = r.rms = r.median_abs = std::nan("");
     return r;

@@ -27,6 +27,12 @@ struct CurvatureErrors {
   std::size_t gt_valid = 0;  // pixels with ground truth
   std::size_t frames = 0;
   int support_radius = 0;  // px; > 0: only interior pixels counted (header)
+  // With the estimate's sd maps (curvature_spread.hpp), over the compared pixels that have a
+  // finite sd, with e = √((Δκ₁² + Δκ₂²) / 2) per pixel:
+  std::size_t sd_compared = 0;  // such pixels (0: no sd given)
+  double sd_rms = 0.0;          // RMS of the sd, 1/m
+  double rms_where_sd = 0.0;    // RMS of e over the same pixels, 1/m (near sd_rms: calibrated)
+  double within_2sd = 0.0;      // fraction with e < 2 sd (0.98 for Gaussian errors at sd)
 };
 
 /// Accumulates frames; throws InputError when a frame's sizes differ.
@@ -37,13 +43,17 @@ class CurvatureErrorAccumulator {
   /// throws InputError outside that range.
   explicit CurvatureErrorAccumulator(int support_radius = 0);
 
-  void add(const CurvatureImage& ground_truth, const CurvatureImage& estimate);
+  /// `sd`, when given, is the estimate's sd map of the same size (throws InputError otherwise).
+  void add(const CurvatureImage& ground_truth, const CurvatureImage& estimate,
+           const Image<float>* sd = nullptr);
   CurvatureErrors result() const;
 
  private:
   int support_radius_ = 0;
   double sum_k1_ = 0.0, sum_k2_ = 0.0;
   std::size_t compared_ = 0, gt_valid_ = 0, frames_ = 0;
+  double sum_sd2_ = 0.0, sum_e2_where_sd_ = 0.0;
+  std::size_t sd_compared_ = 0, within_2sd_ = 0;
   // |Δκ| on a logarithmic scale for the median: constant memory however many frames (a list of
   // every error took 8 bytes a pixel, 2.4 GB for 1000 frames at 640x480). Bin 0 holds errors
   // below kMedianFloor, bin k ≥ 1 [floor·r^(k−1), floor·r^k) with r = 1 + kMedianStep, the last

@@ -45,6 +45,27 @@ CurvatureImage read_curvature_npy(const std::string& path) {
   return image;
 }
 
+void write_curvature_sd_npy(const std::string& path, const Image<float>& sd) {
+  write_npy<float>(path,
+                   {static_cast<std::size_t>(sd.height()), static_cast<std::size_t>(sd.width())},
+                   sd.empty() ? nullptr : sd.data());
+}
+
+Image<float> read_curvature_sd_npy(const std::string& path) {
+  const NpyArray array = read_npy(path);
+  if (array.shape.size() != 2 || array.shape[0] == 0 || array.shape[1] == 0 ||
+      array.shape[0] > 1 << 16 || array.shape[1] > 1 << 16)
+    throw InputError(path + ": expected a curvature sd map of shape H x W");
+  if (array.dtype != "f4" && array.dtype != "f8")
+    throw InputError(path + ": a curvature sd map must be float32 or float64, got dtype '" +
+                     array.dtype + "'");
+  const std::vector<float> values = array.to_float();
+  Image<float> image(static_cast<int>(array.shape[1]), static_cast<int>(array.shape[0]));
+  for (std::size_t i = 0; i < image.size(); ++i)
+    image[i] = values[i];
+  return image;
+}
+
 std::string format_curvature_ply(const VertexMap& vertices, const QuadricMap& map,
                                  const CurvatureColorParams& colors) {
   if (vertices.width() != map.width() || vertices.height() != map.height())

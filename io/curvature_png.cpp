@@ -1,4 +1,5 @@
 // save_curvature_png (curvature_output.hpp): the colour map with its key and OpenCV text labels.
+#include <cmath>
 #include <cstdio>
 
 #include <opencv2/imgproc.hpp>
@@ -6,6 +7,7 @@
 #include "jpcr/io/atomic_file.hpp"
 #include "jpcr/io/curvature_output.hpp"
 #include "jpcr/io/depth_png.hpp"
+#include "jpcr/quadric/curvature_spread.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
@@ -38,10 +40,12 @@ void save_curvature_png(const std::string& path, const CurvatureImage& curvature
 }
 
 CurvatureWriter::CurvatureWriter(std::string directory, bool ply,
-                                 const CurvatureColorParams& colors)
-    : directory_(std::move(directory)), ply_(ply), colors_(colors) {
+                                 const CurvatureColorParams& colors,
+                                 std::optional<QuadricParams> spread)
+    : directory_(std::move(directory)), ply_(ply), colors_(colors), spread_(std::move(spread)) {
   ensure_directory(directory_ + "/curvature");
   ensure_directory(directory_ + "/curvature_png");
+  if (spread_) ensure_directory(directory_ + "/curvature_sd");
   if (ply_) ensure_directory(directory_ + "/ply");
 }
 
@@ -54,8 +58,29 @@ void CurvatureWriter::write(const std::string& stamp, const QuadricMap& map,
                      " (their frames' timestamps agree to 1 us, the resolution of the names)");
   write_curvature_npy(directory_ + "/curvature/" + stamp + ".npy", map.curvature);
   save_curvature_png(directory_ + "/curvature_png/" + stamp + ".png", map.curvature, colors_);
+  if (spread_) {
+    const Image<float> sd =
+        curvature_spread(map, vertices, spread_->pattern_for(vertices.width()), spread_->fit);
+    write_curvature_sd_npy(directory_ + "/curvature_sd/" + stamp + ".npy", sd);
+    for (std::size_t i = 0; i < sd.size(); ++i)
+      if (map.status[i] == QuadricStatus::kValid) {
+        ++sd_valid_pixels_;
+        sd_withheld_pixels_ += std::isfinite(sd[i]) ? 0 : 1;
+      }
+  }
   if (ply_) write_curvature_ply(directory_ + "/ply/" + stamp + ".ply", vertices, map, colors_);
   ++written_;
+}
+
+std::string CurvatureWriter::sd_warning() const {
+  if (sd_valid_pixels_ == 0 || 2 * sd_withheld_pixels_ <= sd_valid_pixels_) return "";
+  char percent[16];
+  std::snprintf(percent, sizeof percent, "%.0f",
+                100.0 * double(sd_withheld_pixels_) / double(sd_valid_pixels_));
+  return std::string("no curvature sd at ") + percent +
+         " % of the valid pixels: over a tenth of their samples fall outside quadric.fit's "
+         "residual gate, so the gate is likely below the depth noise and the fits are truncated "
+         "(README, \"Curvature spread\" and \"Range noise\")";
 }
 
 }  // namespace jpcr

@@ -67,6 +67,32 @@ TEST(CurvatureOutput, ReadingAMapOfTheWrongShapeNamesTheFile) {
             std::string::npos);
 }
 
+TEST(CurvatureOutput, SdMapRoundTripsAndAWrongShapeNamesTheFile) {
+  test::TempDir dir;
+  Image<float> sd(4, 3, 0.0f);
+  for (std::size_t i = 0; i < sd.size(); ++i)
+    sd[i] = 0.25f * static_cast<float>(i);
+  sd(2, 1) = kNaN;
+  write_curvature_sd_npy(dir.file("sd.npy"), sd);
+  EXPECT_EQ(read_npy(dir.file("sd.npy")).shape, (std::vector<std::size_t>{3, 4}));
+  const Image<float> back = read_curvature_sd_npy(dir.file("sd.npy"));
+  ASSERT_EQ(back.width(), 4);
+  ASSERT_EQ(back.height(), 3);
+  for (std::size_t i = 0; i < sd.size(); ++i)
+    EXPECT_TRUE(std::isnan(sd[i]) ? std::isnan(back[i]) : back[i] == sd[i]) << i;
+  write_curvature_npy(dir.file("k.npy"), ramp(4, 3));  // a curvature map is no sd map
+  EXPECT_NE(test::input_error_of([&] {
+              read_curvature_sd_npy(dir.file("k.npy"));
+            }).find("k.npy: expected a curvature sd map of shape H x W"),
+            std::string::npos);
+  const std::vector<std::uint8_t> bytes(12, 1);
+  write_npy<std::uint8_t>(dir.file("mask.npy"), {3, 4}, bytes.data());
+  EXPECT_NE(test::input_error_of([&] {
+              read_curvature_sd_npy(dir.file("mask.npy"));
+            }).find("mask.npy: a curvature sd map must be float32 or float64, got dtype 'u1'"),
+            std::string::npos);
+}
+
 TEST(CurvatureOutput, PlyHasOneBinaryVertexPerValidQuadric) {
   QuadricMap map(4, 3);
   VertexMap vertices(4, 3, invalid_vector());
@@ -148,6 +174,37 @@ TEST(CurvatureMetrics, RmsAndCoverageOfAHandComputedCase) {
   EXPECT_NEAR(e.rms_k2, std::sqrt((0.16 + 1.0) / 2), 1e-6);
   EXPECT_NEAR(e.rms, std::sqrt((0.09 + 0.16 + 1.0) / 4), 1e-6);
   EXPECT_THROW(acc.add(gt, CurvatureImage(3, 2, Eigen::Vector2f::Zero())), InputError);
+}
+
+// With an sd map: over the compared pixels with a finite, non-negative sd, the RMS sd, the RMS
+// error e = √((Δκ₁² + Δκ₂²) / 2) there, and the share of e < 2 sd.
+TEST(CurvatureMetrics, SdFiguresOfAHandComputedCase) {
+  CurvatureImage gt(3, 2, Eigen::Vector2f(0, 0)), est(3, 2, Eigen::Vector2f(kNaN, kNaN));
+  Image<float> sd(3, 2, kNaN);
+  est(0, 0) = {3, 4};  // e² = 12.5
+  sd(0, 0) = 2.0f;     // e = 3.54 < 4: within 2 sd
+  est(1, 0) = {1, 1};  // e² = 1
+  sd(1, 0) = 0.4f;     // e = 1 > 0.8
+  est(2, 0) = {9, 9};  // compared, but without an sd: not in the sd figures
+  est(0, 1) = {1, 0};
+  sd(0, 1) = -1.0f;  // a negative sd is none
+  sd(1, 1) = 1.0f;   // no estimate there: not compared
+  CurvatureErrorAccumulator acc;
+  acc.add(gt, est, &sd);
+  const CurvatureErrors e = acc.result();
+  EXPECT_EQ(e.compared, 4u);
+  EXPECT_EQ(e.sd_compared, 2u);
+  EXPECT_NEAR(e.sd_rms, std::sqrt((4.0 + 0.16) / 2), 1e-6);
+  EXPECT_NEAR(e.rms_where_sd, std::sqrt((12.5 + 1.0) / 2), 1e-6);
+  EXPECT_NEAR(e.within_2sd, 0.5, 1e-12);
+  const Image<float> other(2, 2, 1.0f);
+  EXPECT_NE(test::input_error_of([&] {
+              acc.add(gt, est, &other);
+            }).find("the sd map is 2x2 but its curvature map is 3x2"),
+            std::string::npos);
+  CurvatureErrorAccumulator without;
+  without.add(gt, est);
+  EXPECT_EQ(without.result().sd_compared, 0u);
 }
 
 // The median |Δκ| comes from a logarithmic histogram (constant memory): within 1e-4 relative of

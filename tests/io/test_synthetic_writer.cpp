@@ -4,16 +4,22 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include <gtest/gtest.h>
 
+#include "input_error.hpp"
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/curvature_output.hpp"
 #include "jpcr/io/depth_png.hpp"
 #include "jpcr/io/npy.hpp"
+#include "jpcr/io/synthetic_ray_caster.hpp"
 #include "jpcr/io/synthetic_writer.hpp"
 #include "jpcr/io/tum_dataset.hpp"
+#include "jpcr/quadric/curvature_spread.hpp"
 #include "jpcr/quadric/error.hpp"
+#include "jpcr/quadric/quadric_fit.hpp"
 #include "temp_dir.hpp"
 
 namespace jpcr {
@@ -156,6 +162,55 @@ TEST(CurvatureWriter, ASecondMapOfTheSameStampIsAnInputError) {
   }
   EXPECT_EQ(writer.written(), 1u);
   EXPECT_TRUE(std::filesystem::exists(dir.file("curvature/0.000000.npy")));
+}
+
+// With the fit's parameters the writer adds curvature_sd/<stamp>.npy, curvature_spread of the
+// map on the vertices it was given; without them it writes no curvature_sd/ at all, and counts
+// nothing for the warning.
+TEST(CurvatureWriter, WritesTheSdMapWhenGivenTheFitsParameters) {
+  const CameraIntrinsics camera = synthetic_camera(80, 60);
+  SyntheticScene scene;
+  scene.surfaces = {Sphere{{0, 0, 2}, 0.8}};
+  const SyntheticFrame f =
+      render(scene, camera, Eigen::Isometry3d::Identity(), parse_noise("range:0.5"), 3);
+  const VertexMap vertices = compute_vertex_map(f.frame.depth, camera);
+  QuadricParams params;
+  params.fit.fair_n0_per_range = 0.05f;
+  params.fit.gate_per_range = 0.015f;
+  const QuadricMap map = QuadricFit(params).estimate(vertices);
+  ASSERT_GT(map.valid_count(), 1000u);
+  test::TempDir dir;
+  const CurvatureWriter writer(dir.path(), false, {}, params);
+  writer.write("0.000000", map, vertices);
+  const Image<float> written = read_curvature_sd_npy(dir.file("curvature_sd/0.000000.npy"));
+  const Image<float> expected =
+      curvature_spread(map, vertices, params.pattern_for(camera.width), params.fit);
+  ASSERT_EQ(written.size(), expected.size());
+  std::size_t with_sd = 0;
+  for (std::size_t i = 0; i < written.size(); ++i) {
+    EXPECT_TRUE(std::isnan(expected[i]) ? std::isnan(written[i]) : written[i] == expected[i]) << i;
+    with_sd += std::isfinite(expected[i]) ? 1 : 0;
+  }
+  EXPECT_EQ(writer.sd_valid_pixels(), map.valid_count());
+  EXPECT_EQ(writer.sd_withheld_pixels(), map.valid_count() - with_sd);
+  EXPECT_EQ(writer.sd_warning(), "");  // the gate is 3 σ: most pixels have an sd
+
+  // The built-in 14 mm gate under 1 % range noise at 2 m (σ = 20 mm): most sd withheld, warned.
+  const SyntheticFrame noisy =
+      render(scene, camera, Eigen::Isometry3d::Identity(), parse_noise("range:1"), 3);
+  const VertexMap noisy_vertices = compute_vertex_map(noisy.frame.depth, camera);
+  test::TempDir built_in;
+  const CurvatureWriter warned(built_in.path(), false, {}, QuadricParams{});
+  warned.write("0.000000", QuadricFit().estimate(noisy_vertices), noisy_vertices);
+  EXPECT_GT(2 * warned.sd_withheld_pixels(), warned.sd_valid_pixels());
+  EXPECT_NE(warned.sd_warning().find("gate is likely below the depth noise"), std::string::npos)
+      << warned.sd_warning();
+
+  test::TempDir plain;
+  const CurvatureWriter without(plain.path(), false);
+  without.write("0.000000", map, vertices);
+  EXPECT_FALSE(std::filesystem::exists(plain.file("curvature_sd")));
+  EXPECT_EQ(without.sd_valid_pixels(), 0u);
 }
 
 }  // namespace

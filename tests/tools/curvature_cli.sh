@@ -19,10 +19,21 @@ expect 0 "wrote 2 curvature maps" -- "$curv" --dataset "$tmp/seq" --method ls --
 # Only Quad IT has a CUDA kernel: --device with Quad LS says so (it ran on the CPU silently).
 expect 0 "warning: --device has no effect: method ls runs on the CPU" -- \
   "$curv" --dataset "$tmp/seq" --method ls --frames 0 --device cpu --out "$tmp/ls_device"
-for d in curvature curvature_png ply; do
+for d in curvature curvature_sd curvature_png ply; do
   n=$(ls "$tmp/it/$d" | wc -l)
   [ "$n" = 3 ] || { echo "FAIL: it/$d has $n files, want 3"; fail=1; }
 done
+# The sd describes Quad IT's weighted fit: Quad LS writes none, and --no-sd none for Quad IT.
+[ ! -e "$tmp/ls/curvature_sd" ] || { echo "FAIL: ls wrote curvature_sd/"; fail=1; }
+expect 0 "wrote 1 curvature maps" -- "$curv" --dataset "$tmp/seq" --frames 0 --no-sd --out "$tmp/it_no_sd"
+[ ! -e "$tmp/it_no_sd/curvature_sd" ] || { echo "FAIL: --no-sd wrote curvature_sd/"; fail=1; }
+# The built-in 14 mm gate is below 0.5 % range noise at the room's 2-5 m: most sd are withheld,
+# and the run says why. With the gate at 3 sigma (README "Range noise") most pixels have one.
+expect 0 "warning: no curvature sd at .* gate is likely below the depth noise" -- \
+  "$curv" --dataset "$tmp/seq" --frames 0 --out "$tmp/it_built_in"
+printf 'quadric:\n  fit:\n    fair_n0_per_range: 0.05\n    gate_per_range: 0.015\n' > "$tmp/matched.yaml"
+out=$("$curv" --dataset "$tmp/seq" --params "$tmp/matched.yaml" --out "$tmp/it_matched" 2>&1)
+if grep -q "no curvature sd" <<<"$out"; then echo "FAIL: warned with the matched gate: $out"; fail=1; fi
 [ -s "$tmp/it/summary.json" ] || { echo "FAIL: no summary.json"; fail=1; }
 head -c 600 "$tmp/it/ply/0.000000.ply" | grep -q "property float k1" || { echo "FAIL: PLY header"; fail=1; }
 
@@ -47,9 +58,15 @@ r = json.load(open(t + "/it.json"))
 assert r["frames"] == 3 and r["estimated_frames"] == 3 and r["gt_frames"] == 3, r
 assert 0.9 < r["coverage"] <= 1.0, r
 assert 0 < r["rms"] < 50, r
+assert 0 < r["sd_compared_pixels"] <= r["compared_pixels"] and 0 <= r["within_2sd"] <= 1, r
 i = json.load(open(t + "/it_interior.json"))
 assert i["support_radius_px"] == 5 and 0 < i["gt_valid_pixels"] < r["gt_valid_pixels"], (i, r)
 assert i["rms"] < r["rms"], (i, r)
+sd = np.load(t + "/it_matched/curvature_sd/0.000000.npy")
+assert sd.shape == (120, 160) and sd.dtype == np.float32, (sd.shape, sd.dtype)
+km = np.load(t + "/it_matched/curvature/0.000000.npy")
+assert not np.any(np.isfinite(sd) & ~np.isfinite(km[..., 0]))  # an sd only where a curvature
+assert np.isfinite(sd).sum() > 0.5 * np.isfinite(km[..., 0]).sum() and np.nanmin(sd) >= 0
 k = np.load(sorted(glob.glob(t + "/it/curvature/*.npy"))[0])
 assert k.shape == (120, 160, 2) and k.dtype == np.float32, (k.shape, k.dtype)
 valid = np.isfinite(k[..., 0])

@@ -17,8 +17,10 @@ expect 0 "j-ftf " -- "$run" --dataset "$tmp/seq" --method j-ftf --out "$tmp/ftf"
 for f in trajectory.txt front_end.txt keyframes.txt report.json; do
   [ -s "$tmp/ftf/$f" ] || { echo "FAIL: $f missing"; fail=1; }
 done
-n=$(ls "$tmp/ftf/curvature" | wc -l)
-[ "$n" = 4 ] || { echo "FAIL: $n curvature maps, want 4 (one per keyframe)"; fail=1; }
+for d in curvature curvature_sd; do
+  n=$(ls "$tmp/ftf/$d" | wc -l)
+  [ "$n" = 4 ] || { echo "FAIL: $n maps in $d/, want 4 (one per keyframe)"; fail=1; }
+done
 expect 0 "ATE" -- "$eval_bin" traj --gt "$tmp/seq/groundtruth.txt" --est "$tmp/ftf/trajectory.txt"
 if /usr/bin/python3 -c 'import numpy' 2>/dev/null; then
   /usr/bin/python3 - "$tmp" <<'PY' || fail=1
@@ -90,6 +92,8 @@ expect 0 "warning: --window has no effect: method icp-ftf refines no windows" --
   --dataset "$tmp/seq" --method icp-ftf --window 7 --out "$tmp/icp"
 expect 0 "warning: --ply has no effect: method icp-ftf fits no quadrics" -- "$run" \
   --dataset "$tmp/seq" --method icp-ftf --ply --out "$tmp/icp"
+expect 0 "warning: --no-sd has no effect: method icp-ftf fits no quadrics" -- "$run" \
+  --dataset "$tmp/seq" --method icp-ftf --no-sd --out "$tmp/icp"
 expect 0 "warning: --device has no effect: method icp-ftf runs on the CPU" -- "$run" \
   --dataset "$tmp/seq" --method icp-ftf --device cuda --out "$tmp/icp"
 expect 0 "icp-ftf" -- "$run" --dataset "$tmp/seq" --method icp-ftf --out "$tmp/icp"
@@ -101,8 +105,8 @@ n=$(ls "$tmp/icp/curvature" | wc -l)
 # while a file of the user's stays.
 echo "mine" > "$tmp/ftf/notes.txt"
 expect 0 "icp-ftf" -- "$run" --dataset "$tmp/seq" --method icp-ftf --out "$tmp/ftf"
-n=$(ls "$tmp/ftf/curvature" | wc -l)
-[ "$n" = 0 ] || { echo "FAIL: $n stale curvature maps of the earlier run in OUT"; fail=1; }
+n=$(ls "$tmp/ftf/curvature" "$tmp/ftf/curvature_sd" | grep -c npy)
+[ "$n" = 0 ] || { echo "FAIL: $n stale curvature or sd maps of the earlier run in OUT"; fail=1; }
 grep -q mine "$tmp/ftf/notes.txt" || { echo "FAIL: the user's file in OUT was touched"; fail=1; }
 # A run that fails (a corrupt frame after good ones) changes nothing in OUT and leaves no
 # staging directory; into a new OUT it creates nothing.

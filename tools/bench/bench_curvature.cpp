@@ -11,6 +11,7 @@
 #include "benchmark_main.hpp"
 
 #include "jpcr/io/synthetic_sequence.hpp"
+#include "jpcr/quadric/curvature_spread.hpp"
 #include "jpcr/quadric/least_squares_quadric.hpp"
 #ifdef JPCR_HAVE_CGAL
 #include "peers/cgal_jet_curvature.hpp"
@@ -58,6 +59,17 @@ void BM_CgalJetPeer(benchmark::State& state) {  // CGAL Monge jet fitting, same 
 BENCHMARK(BM_CgalJetPeer)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->UseRealTime();
 #endif
 
+// The sd of every pixel of Quad IT's map (curvature_spread.hpp), which jpcr_run and
+// jpcr_curvature write beside each map: one more pass over each pixel's samples.
+void BM_CurvatureSpread(benchmark::State& state) {
+  const jpcr::VertexMap vertices = frame(static_cast<int>(state.range(0)));
+  const jpcr::QuadricFit fit;
+  const jpcr::QuadricMap map = fit.estimate(vertices);
+  const jpcr::NeighbourhoodPattern pattern = fit.params().pattern_for(vertices.width());
+  for (auto _ : state)
+    benchmark::DoNotOptimize(jpcr::curvature_spread(map, vertices, pattern, fit.params().fit));
+}
+
 void BM_Normals(benchmark::State& state) {
   const jpcr::VertexMap vertices = frame(static_cast<int>(state.range(0)));
   for (auto _ : state)
@@ -66,6 +78,7 @@ void BM_Normals(benchmark::State& state) {
 
 BENCHMARK(BM_QuadIT)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_QuadLS)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_CurvatureSpread)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Normals)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
@@ -73,8 +86,11 @@ BENCHMARK(BM_Normals)->Arg(320)->Arg(640)->Unit(benchmark::kMillisecond)->UseRea
 int main(int argc, char** argv) {
   return jpcr::bench::benchmark_main(
       argc, argv, "bench_curvature",
-      "Times Quad IT, Quad LS and the initial normals (and the CGAL jet peer where built with\n"
-      "CGAL) on one rendered room_spheres frame with 1 % range noise, at 320x240 and 640x480,\n"
-      "then prints Quad IT / CGAL jet and Quad LS / Quad IT from the same run.",
-      {{"BM_QuadIT", "BM_CgalJetPeer"}, {"BM_QuadLS", "BM_QuadIT"}});
+      "Times Quad IT, Quad LS, the curvature sd of Quad IT's map and the initial normals (and\n"
+      "the CGAL jet peer where built with CGAL) on one rendered room_spheres frame with 1 %\n"
+      "range noise, at 320x240 and 640x480, then prints Quad IT / CGAL jet, Quad LS / Quad IT\n"
+      "and the sd / Quad IT from the same run.",
+      {{"BM_QuadIT", "BM_CgalJetPeer"},
+       {"BM_QuadLS", "BM_QuadIT"},
+       {"BM_CurvatureSpread", "BM_QuadIT"}});
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <sstream>
 
 #include "cli/arguments.hpp"
@@ -119,8 +120,10 @@ int run(int argc, char** argv) {
       "seen from outside is negative) of every depth frame of a dataset, with Quad IT\n"
       "(the iterative weighted quadric fit) or Quad LS (the least-squares baseline).\n"
       "Writes OUT/curvature/<stamp>.npy (float32 HxWx2, NaN where invalid),\n"
-      "OUT/curvature_png/<stamp>.png (colour with key), optionally\n"
-      "OUT/ply/<stamp>.ply, and OUT/summary.json.");
+      "OUT/curvature_png/<stamp>.png (colour with key), with Quad IT\n"
+      "OUT/curvature_sd/<stamp>.npy (float32 HxW: each pixel's curvature sd in 1/m, from\n"
+      "its fit's residuals; README \"Curvature spread\"), optionally OUT/ply/<stamp>.ply,\n"
+      "and OUT/summary.json.");
   args.required("dataset", "TUM directory (jpcr_synth writes one) or MRPT .rawlog")
       .option("config", "camera YAML (default: the dataset's own camera.yaml or rawlog intrinsics)")
       .option("method", kMethodHelp, "it")
@@ -131,6 +134,8 @@ int run(int argc, char** argv) {
       .option("params", "parameter YAML (section quadric:)", "")
       .option("color-scale", "curvedness drawn fully saturated in the PNG (1/m)", "10")
       .flag("ply", "also write a PLY point cloud per frame (k1, k2 as vertex properties)")
+      .flag("no-sd",
+            "write no curvature_sd/ maps with Quad IT (they take about as long as the fit)")
       .epilog(
           "example:\n  jpcr_synth --scene room_spheres --frames 5 --noise range:1 --out seq\n"
           "  jpcr_curvature --dataset seq --method it --out seq_it\n"
@@ -144,7 +149,11 @@ int run(int argc, char** argv) {
     const std::string method = args.get("method");
     const std::unique_ptr<CurvatureEstimator> estimator =
         make_estimator(method, params.quadric, cli::device_from(args, params));
-    if (args.has("device") && method != "it" && method != "quad-it")
+    const bool is_quad_it = method == "it" || method == "quad-it";
+    if (args.get_flag("no-sd") && !is_quad_it)
+      std::cerr << "jpcr_curvature: warning: --no-sd has no effect: method " << method
+                << " writes no sd maps (only Quad IT does)\n";
+    if (args.has("device") && !is_quad_it)
       std::cerr << "jpcr_curvature: warning: --device has no effect: method " << method
                 << " runs on the CPU (only Quad IT has a CUDA kernel)\n";
     CurvatureColorParams colors;
@@ -162,9 +171,13 @@ int run(int argc, char** argv) {
     // Written into a staging directory and moved into OUT at the end (io/staged_output.hpp).
     // Ctrl-C stops at the next frame, OUT unchanged; installed before the staging exists.
     cli::install_stop_signal_handler(cli::OnStop::kSayItStops);
-    StagedOutput out(args.get("out"), {"curvature", "curvature_png", "ply", "summary.json"});
+    StagedOutput out(args.get("out"),
+                     {"curvature", "curvature_sd", "curvature_png", "ply", "summary.json"});
     cli::require_inputs_apart_from(out, args);
-    const CurvatureWriter writer(out.directory(), args.get_flag("ply"), colors);
+    // The sd describes a weighted quadric fit (Quad IT's); Quad LS and the jet peer fit others.
+    std::optional<QuadricParams> spread;
+    if (is_quad_it && !args.get_flag("no-sd")) spread = params.quadric;
+    const CurvatureWriter writer(out.directory(), args.get_flag("ply"), colors, spread);
     std::cerr << "jpcr_curvature: " << dataset->description() << ", " << estimator->name()
               << ", frames " << range.first << ":" << range.last << '\n';
 
@@ -200,6 +213,8 @@ int run(int argc, char** argv) {
     cli::throw_if_stopped("the end of the run; " + out.target() + " is left as it was");
     out.commit();
     std::cout << "wrote " << records.size() << " curvature maps to " << out.target() << '\n';
+    if (const std::string warning = writer.sd_warning(); !warning.empty())
+      std::cerr << "jpcr_curvature: warning: " << warning << '\n';
     return 0;
   });
 }

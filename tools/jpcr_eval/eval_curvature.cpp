@@ -69,8 +69,13 @@ void write_json(std::ostream& out, const CurvatureErrors& e, std::size_t estimat
       .field("coverage", e.coverage)
       .field("compared_pixels", e.compared)
       .field("gt_valid_pixels", e.gt_valid)
-      .field("support_radius_px", e.support_radius)
-      .end_object();
+      .field("support_radius_px", e.support_radius);
+  if (e.sd_compared > 0)  // the estimate has sd maps (jpcr_run, jpcr_curvature with Quad IT)
+    json.field("sd_compared_pixels", e.sd_compared)
+        .field("sd_rms", e.sd_rms)
+        .field("rms_where_sd", e.rms_where_sd)
+        .field("within_2sd", e.within_2sd);
+  json.end_object();
   out << '\n';
 }
 
@@ -85,7 +90,10 @@ int run_curvature(int argc, char** argv) {
       "matched by stamp (GT/curvature/<stamp>.npy and EST/curvature/<stamp>.npy).\n"
       "With --support R only interior pixels count: those whose (2R+1)x(2R+1) window\n"
       "has ground truth everywhere, so a patch fit of radius R sees one smooth surface\n"
-      "(no crease, rim or silhouette in it).");
+      "(no crease, rim or silhouette in it). Where EST has sd maps\n"
+      "(EST/curvature_sd/<stamp>.npy, jpcr_run and jpcr_curvature write them), it also says\n"
+      "how well they describe the error: RMS sd against RMS error over the pixels with an\n"
+      "sd, and the fraction of errors within 2 sd (about 98 % when they describe it).");
   args.required("gt", "ground-truth directory (jpcr_synth output)")
       .required("est", "estimate directory (jpcr_curvature or jpcr_run output)")
       .option("support",
@@ -108,6 +116,7 @@ int run_curvature(int argc, char** argv) {
     std::size_t infinite = 0;   // estimate pixels at ±Inf: counted as missing, and said so
     std::size_t unordered = 0;  // κ1 < κ2: another convention (swapped channels, flipped sign)
     std::size_t unmatched = 0;  // estimated maps whose stamp has no ground truth: not compared
+    std::size_t with_sd = 0;    // compared maps with an sd map
     for (const std::string& stamp : est) {
       if (!gt.count(stamp)) {
         ++unmatched;
@@ -129,7 +138,20 @@ int run_curvature(int argc, char** argv) {
           infinite += k.array().isInf().any() ? 1 : 0;
           unordered += k.x() < k.y() ? 1 : 0;  // false with a NaN
         }
-        acc->add(truth, estimate);
+        // An sd map is optional per stamp (maps from Quad LS have none).
+        const fs::path sd_file = fs::path(args.get("est")) / "curvature_sd" / (stamp + ".npy");
+        std::error_code ec;
+        std::optional<Image<float>> sd;
+        if (fs::exists(sd_file, ec)) {
+          sd = read_curvature_sd_npy(sd_file.string());
+          ++with_sd;
+        }
+        try {
+          acc->add(truth, estimate, sd ? &*sd : nullptr);
+        } catch (const InputError& e) {
+          if (!sd) throw;
+          throw InputError(sd_file.string() + ": " + e.what());
+        }
       } catch (const InputError& e) {  // name the map, not only the problem (once)
         const std::string what = e.what();
         if (what.rfind(est_file + ": ", 0) == 0) throw;
@@ -170,6 +192,12 @@ int run_curvature(int argc, char** argv) {
       std::printf("coverage %.2f %% (%zu of %zu ground-truth pixels of the compared frames%s)\n",
                   100.0 * e.coverage, e.compared, e.gt_valid,
                   e.support_radius > 0 ? ", interior only" : "");
+      if (e.sd_compared > 0)
+        std::printf(
+            "sd (%zu of the frames' maps, %zu pixels): rms sd %.4f 1/m against rms error "
+            "%.4f 1/m there (ratio %.3f), %.1f %% of errors within 2 sd\n",
+            with_sd, e.sd_compared, e.sd_rms, e.rms_where_sd, e.rms_where_sd / e.sd_rms,
+            100.0 * e.within_2sd);
     }
     return 0;
   });

@@ -4,6 +4,7 @@
 // per keyframe and a JSON report; with ground truth, prints the error table.
 #include <chrono>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "cli/arguments.hpp"
@@ -58,10 +59,11 @@ int run_main(int argc, char** argv) {
       "icp-ftf, j-ftf, j-full, q-full and icp-bundle (the point-to-plane bundle adjustment\n"
       "baseline over the same sliding windows as j-full, solved with Ceres; section icp_bundle\n"
       "of --params). Writes OUT/trajectory.txt (TUM, refined),\n"
-      "OUT/front_end.txt (ICP-ftf), OUT/keyframes.txt, OUT/curvature/<stamp>.npy and\n"
-      "OUT/curvature_png/<stamp>.png per keyframe, OUT/report.json, and OUT/verdicts.txt (per\n"
-      "frame: front-end and back-end verdicts, trusted yes/no). A keyframe's map comes from\n"
-      "the quadrics of its J-ftf pair or, for the first keyframe of a J-full window, of\n"
+      "OUT/front_end.txt (ICP-ftf), OUT/keyframes.txt, OUT/curvature/<stamp>.npy,\n"
+      "OUT/curvature_sd/<stamp>.npy (each pixel's curvature sd, 1/m, from its fit's residuals)\n"
+      "and OUT/curvature_png/<stamp>.png per keyframe, OUT/report.json, and OUT/verdicts.txt\n"
+      "(per frame: front-end and back-end verdicts, trusted yes/no). A keyframe's map comes\n"
+      "from the quadrics of its J-ftf pair or, for the first keyframe of a J-full window, of\n"
       "J-full; elsewhere it is Quad IT's. report.json keyframe_records[].curvature says whose.");
   args.required("dataset", "TUM directory (jpcr_synth writes one) or MRPT .rawlog")
       .option("config", "camera YAML (default: the dataset's camera.yaml or rawlog intrinsics)")
@@ -76,7 +78,8 @@ int run_main(int argc, char** argv) {
       .required("out",
                 "output directory (created; the outputs of an earlier run there are replaced, "
                 "other files are left alone; nothing is written when the run fails)")
-      .flag("ply", "also write a PLY point cloud per keyframe");
+      .flag("ply", "also write a PLY point cloud per keyframe")
+      .flag("no-sd", "write no curvature_sd/ maps (each costs about one Quad IT pass)");
   cli::add_device_option(args);
 #ifdef JPCR_HAVE_DDS
   args.flag("dds",
@@ -100,8 +103,10 @@ int run_main(int argc, char** argv) {
     if (args.has("window") && pairs_only)
       std::cerr << "jpcr_run: warning: --window has no effect: method "
                 << to_string(pipeline.method) << " refines no windows\n";
-    if (args.get_flag("ply") && pipeline.method == PipelineMethod::kIcpFtf)
-      std::cerr << "jpcr_run: warning: --ply has no effect: method icp-ftf fits no quadrics\n";
+    for (const char* flag : {"ply", "no-sd"})
+      if (args.get_flag(flag) && pipeline.method == PipelineMethod::kIcpFtf)
+        std::cerr << "jpcr_run: warning: --" << flag
+                  << " has no effect: method icp-ftf fits no quadrics\n";
     if (!pipeline.keep_history)
       throw InputError(args.get("params") +
                        ": pipeline.keep_history: false is for live runs (jpcr_node); jpcr_run "
@@ -149,9 +154,11 @@ int run_main(int argc, char** argv) {
     cli::install_stop_signal_handler(cli::OnStop::kSayItStops);
     StagedOutput out(args.get("out"),
                      {"trajectory.txt", "verdicts.txt", "front_end.txt", "keyframes.txt",
-                      "report.json", "curvature", "curvature_png", "ply"});
+                      "report.json", "curvature", "curvature_sd", "curvature_png", "ply"});
     cli::require_inputs_apart_from(out, args);
-    const CurvatureWriter writer(out.directory(), args.get_flag("ply"));
+    std::optional<QuadricParams> spread;  // the pattern and fit every keyframe map was made with
+    if (!args.get_flag("no-sd")) spread = pipeline.joint.quadric;
+    const CurvatureWriter writer(out.directory(), args.get_flag("ply"), {}, spread);
     KeyframePipeline runner(
         pipeline,
         [&](int k, const Frame& frame, const QuadricMap& quadrics) {
@@ -160,7 +167,8 @@ int run_main(int argc, char** argv) {
 #endif
           (void)k;
           (void)self;
-          // The vertex map is only needed for the PLY; compute_vertex_map is cheap next to J-ftf.
+          // The vertex map (of the depth the map was fitted on) is needed for the sd and the PLY;
+          // compute_vertex_map is cheap next to J-ftf.
           out.write<OutputError>([&] {  // e.g. a full disk: named by OUT, not by the dataset
             writer.write(format_stamp(frame.timestamp), quadrics,
                          compute_vertex_map(frame.depth, frame.camera));
@@ -250,6 +258,8 @@ int run_main(int argc, char** argv) {
               << " keyframes and " << writer.written() << " curvature maps to " << out.target()
               << '\n';
     if (const std::string warning = run::untrusted_warning(runner); !warning.empty())
+      std::cerr << "jpcr_run: warning: " << warning << '\n';
+    if (const std::string warning = writer.sd_warning(); !warning.empty())
       std::cerr << "jpcr_run: warning: " << warning << '\n';
     if (errors)
       run::print_error_table(std::cout, to_string(pipeline.method), front_errors, errors, runner);
