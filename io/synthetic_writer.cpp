@@ -1,5 +1,7 @@
 #include "jpcr/io/synthetic_writer.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <future>
@@ -33,6 +35,24 @@ void check_directory(const std::string& directory, bool force) {
       throw InputError(directory +
                        ": output directory is not empty (use --force to write into it)");
     }
+    // --force replaces the entries of a sequence, not another program's: the results of jpcr_run
+    // or jpcr_curvature would lose their maps and keep reports that describe them, and a
+    // recorded dataset its depth. A generated sequence has normals/ beside depth.txt; no
+    // recording does.
+    if (force) {
+      for (const auto& [marker, program] :
+           {std::pair<const char*, const char*>{"report.json", "jpcr_run"},
+            {"summary.json", "jpcr_curvature"}})
+        if (fs::exists(fs::path(directory) / marker, ec))
+          throw InputError(directory + ": holds " + program + "'s results (" + marker +
+                           "); --force would replace some of them (give another --out)");
+      if (fs::exists(fs::path(directory) / "depth.txt", ec) &&
+          !fs::is_directory(fs::path(directory) / "normals", ec))
+        throw InputError(directory +
+                         ": holds a dataset that jpcr_synth did not write (depth.txt without the "
+                         "generator's normals/); --force replaces only generated sequences (give "
+                         "another --out)");
+    }
     // --force replaces the entries written; TUM readers take an associations.txt before
     // depth.txt and rgb.txt, and an old one would pair the old frames (gone) or only some.
     const fs::path associations = fs::path(directory) / "associations.txt";
@@ -64,7 +84,8 @@ void write_text(const std::string& path, const std::string& text) {
 // The frames, lists, trajectory and camera of `sequence` into `dir` (staging); errors of the
 // frames' consistency name `directory`.
 void write_staged_sequence(const SyntheticSequence& sequence, const fs::path& dir,
-                           const std::string& directory, const SyntheticWriterOptions& options) {
+                           const std::string& directory, const SyntheticWriterOptions& options,
+                           SyntheticWriteSummary& summary) {
   for (const char* sub : {"depth", "rgb", "curvature", "normals"})
     ensure_directory((dir / sub).string());
   const CameraIntrinsics& camera = sequence.camera();
@@ -72,6 +93,13 @@ void write_staged_sequence(const SyntheticSequence& sequence, const fs::path& di
   const std::size_t height = static_cast<std::size_t>(camera.height);
   const auto write_frame = [&](const SyntheticFrame& f, const std::string& stamp) {
     save_depth_png((dir / "depth" / (stamp + ".png")).string(), f.frame.depth, camera.depth_scale);
+    // What the PNG holds (save_depth_png: 0 < depth · scale < 65535.5): a scene beyond 13.1 m at
+    // the TUM scale, or out of view, is no depth at all.
+    const bool any = std::any_of(f.frame.depth.begin(), f.frame.depth.end(), [&](float z) {
+      const double value = static_cast<double>(z) * camera.depth_scale;
+      return std::isfinite(value) && value >= 0.5 && value < 65535.5;
+    });
+    if (!any) ++summary.frames_without_depth;
     save_color_png((dir / "rgb" / (stamp + ".png")).string(), f.frame.color);
     write_npy((dir / "curvature" / (stamp + ".npy")).string(), {height, width, 2},
               f.curvature.data()->data());
@@ -114,16 +142,20 @@ std::string format_stamp(double timestamp) {
   return text;
 }
 
-void write_synthetic_sequence(const SyntheticSequence& sequence, const std::string& directory,
-                              const SyntheticWriterOptions& options) {
+SyntheticWriteSummary write_synthetic_sequence(const SyntheticSequence& sequence,
+                                               const std::string& directory,
+                                               const SyntheticWriterOptions& options) {
   check_directory(directory, options.force);
   // Written whole or not at all: into a staging directory, moved into `directory` at the end
   // (with force, the entries written replace those of the same names there).
   StagedOutput out(directory, {});
   const fs::path dir(out.directory());
   // Its errors name `directory`, the user's, not the staging directory gone when they read it.
-  out.write([&] { write_staged_sequence(sequence, dir, directory, options); });
+  SyntheticWriteSummary summary;
+  out.write([&] { write_staged_sequence(sequence, dir, directory, options, summary); });
   out.commit();
+  summary.frames = sequence.size();
+  return summary;
 }
 
 }  // namespace jpcr

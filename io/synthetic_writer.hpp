@@ -26,10 +26,20 @@ struct SyntheticWriterOptions {
   std::function<void(std::size_t done, std::size_t total)> progress;  // called after each frame
 };
 
+/// What was written: frames, and those whose depth PNG holds no depth at all (nothing in view,
+/// or all of it beyond the PNG's range, 65535 / depth_scale: 13.1 m at the TUM scale).
+struct SyntheticWriteSummary {
+  std::size_t frames = 0;
+  std::size_t frames_without_depth = 0;
+};
+
 /// Throws InputError naming the directory when it is not empty (unless options.force), is not a
-/// directory, or cannot be written.
-void write_synthetic_sequence(const SyntheticSequence& sequence, const std::string& directory,
-                              const SyntheticWriterOptions& options = {});
+/// directory, or cannot be written; with options.force also when it holds another program's
+/// results (report.json, summary.json) or a dataset the generator did not write (a depth.txt
+/// without normals/).
+SyntheticWriteSummary write_synthetic_sequence(const SyntheticSequence& sequence,
+                                               const std::string& directory,
+                                               const SyntheticWriterOptions& options = {});
 
 /// The timestamp text of the file lists and file names: 6 decimals, as TUM ("0.033333").
 std::string format_stamp(double timestamp);

@@ -118,6 +118,37 @@ TEST(SyntheticWriter, RefusesANonEmptyDirectoryUnlessForced) {
   EXPECT_THROW(write_synthetic_sequence(seq, file), InputError);
 }
 
+// --force rewrites a generated sequence, never another program's results or a recording: each
+// is refused before anything is written, and its files stay as they were.
+TEST(SyntheticWriter, ForceRefusesResultsAndRecordedDatasets) {
+  const SyntheticSequence seq = small_sequence("none", TrajectoryKind::kRail);
+  SyntheticWriterOptions force;
+  force.force = true;
+  test::TempDir dir;
+  dir.write("run/report.json", "{}");
+  dir.write("run/curvature/0.000000.npy", "map");
+  dir.write("curv/summary.json", "{}");
+  dir.write("recorded/depth.txt", "# depth maps\n0.0 depth/0.0.png\n");
+  const std::pair<const char*, const char*> cases[] = {
+      {"run", "holds jpcr_run's results (report.json)"},
+      {"curv", "holds jpcr_curvature's results (summary.json)"},
+      {"recorded", "holds a dataset that jpcr_synth did not write"}};
+  for (const auto& [out, message] : cases) {
+    const std::string error =
+        test::input_error_of([&] { write_synthetic_sequence(seq, dir.file(out), force); });
+    EXPECT_NE(error.find(message), std::string::npos) << error;
+  }
+  const auto text = [](const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_EQ(text(dir.file("run/curvature/0.000000.npy")), "map");
+  EXPECT_EQ(text(dir.file("recorded/depth.txt")), "# depth maps\n0.0 depth/0.0.png\n");
+  // A sequence it wrote is rewritten.
+  write_synthetic_sequence(seq, dir.file("seq"));
+  write_synthetic_sequence(seq, dir.file("seq"), force);
+}
+
 // A full disk (a 64 kB tmpfs, as root) mid-sequence: the error names the output the user gave
 // (it named the staging directory, removed by the time they read it) and nothing is left.
 TEST(SyntheticWriter, AFailedWriteNamesTheOutputDirectory) {

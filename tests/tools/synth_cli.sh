@@ -113,6 +113,19 @@ expect 1 "associations.txt: would stay beside the new depth.txt and rgb.txt" -- 
 n=$(ls "$tmp/rail/depth" | wc -l)
 [ "$n" = 1 ] || { echo "FAIL: a refused --force run changed OUT ($n depth frames)"; fail=1; }
 rm "$tmp/rail/associations.txt"
+# A scene with nothing in view writes a sequence without depth: written, and said.
+printf 'view: {eye: [0, -1.8, 1.4], target: [0, 0, 0.5]}\nsurfaces:\n  - {type: sphere, center: [0, -30, 1.4], radius: 0.5}\n' > "$tmp/behind.yaml"
+expect 0 "warning: 2 of 2 frames hold no depth at all" -- \
+  "$synth" --scene "$tmp/behind.yaml" --frames 2 --size 64x48 --out "$tmp/behind"
+# --force replaces a generated sequence only: not another tool's results, not a recording.
+mkdir -p "$tmp/results" && printf '{}\n' > "$tmp/results/report.json"
+expect 1 "holds jpcr_run's results (report.json); --force would replace some of them" -- \
+  "$synth" --frames 1 --size 80x60 --out "$tmp/results" --force
+mkdir -p "$tmp/recorded" && printf '# depth maps\n' > "$tmp/recorded/depth.txt"
+expect 1 "holds a dataset that jpcr_synth did not write" -- \
+  "$synth" --frames 1 --size 80x60 --out "$tmp/recorded" --force
+[ "$(ls "$tmp/recorded" "$tmp/results")" = "$(printf '%s\n' "$tmp/recorded:" depth.txt "" "$tmp/results:" report.json)" ] ||
+  { echo "FAIL: a refused --force run changed its OUT"; fail=1; }
 expect 2 "--out needs a non-empty value" -- "$synth" --frames 1 --out ""
 # An option given twice is refused, both values quoted, and nothing is written.
 expect 2 "--frames is given twice ('1', then '2')" -- "$synth" --frames 1 --out "$tmp/twice" --frames=2

@@ -56,7 +56,10 @@ int run(int argc, char** argv) {
       .required("out", "output directory (created; must be empty unless --force)")
       .option("config", "camera YAML to render with (default: fx = fy = 550 at 640x480)")
       .option("params", "parameter YAML with a synthetic: section (default: built-in values)")
-      .flag("force", "write into a non-empty output directory")
+      .flag("force",
+            "write into a non-empty output directory, replacing a sequence jpcr_synth wrote "
+            "there (refused where it holds jpcr_run's or jpcr_curvature's results or a "
+            "recorded dataset)")
       .epilog("scenes: " + scene_list() +
               "\n\nexample:\n  jpcr_synth --scene room_spheres --trajectory walk --frames 100 "
               "--noise range:1 --out out/room\n  jpcr_eval traj --gt out/room/groundtruth.txt "
@@ -141,9 +144,17 @@ int run(int argc, char** argv) {
                             args.get("out"));
       progress(done, total);
     };
-    write_synthetic_sequence(sequence, args.get("out"), writer);
+    const SyntheticWriteSummary written =
+        write_synthetic_sequence(sequence, args.get("out"), writer);
     std::cout << "wrote " << sequence.size() << " frames to " << args.get("out") << " in "
               << std::chrono::duration<double>(Clock::now() - start).count() << " s\n";
+    if (written.frames_without_depth > 0)
+      std::cerr << "jpcr_synth: warning: " << written.frames_without_depth << " of "
+                << written.frames
+                << " frames hold no depth at all: nothing of the scene is in view within the "
+                   "depth PNG's range of "
+                << format_double(65535.0 / camera.depth_scale)
+                << " m (check the scene's view and sizes)\n";
     return 0;
   });
 }
