@@ -15,6 +15,11 @@ namespace fs = std::filesystem;
 
 namespace jpcr {
 
+namespace {
+// The camera a caller passes: the tools' --config.
+constexpr const char* kGivenCamera = "the camera given (--config)";
+}  // namespace
+
 std::unique_ptr<FrameSource> open_dataset(const std::string& path,
                                           const std::optional<CameraIntrinsics>& camera,
                                           const DatasetParams& params) {
@@ -49,6 +54,7 @@ std::unique_ptr<FrameSource> open_dataset(const std::string& path,
     }
     TumDatasetOptions options;
     options.max_time_difference = params.max_time_difference;
+    options.camera_source = camera ? std::string(kGivenCamera) : own.string();
     return std::make_unique<TumDataset>(path, *cam, options);
   }
   std::string extension = fs::path(path).extension().string();

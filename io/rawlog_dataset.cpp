@@ -214,7 +214,10 @@ RawlogDataset::RawlogDataset(const std::string& path, const std::optional<Camera
   } catch (const std::invalid_argument& e) {
     throw InputError(path + ": invalid camera in the rawlog: " + e.what());
   }
-  if (camera_.has_distortion()) undistortion_ = std::make_unique<DepthUndistortion>(camera_, path);
+  // Only a given camera has distortion here (the rawlog's own is used as stored).
+  if (camera_.has_distortion())
+    undistortion_ =
+        std::make_unique<DepthUndistortion>(camera_, path + " with the camera given (--config)");
   const auto& scans = scans_->observations;
   if (std::any_of(scans.begin(), scans.end(), [](const auto& s) { return !s->range_is_depth; }))
     ray_lengths_ = DepthUndistortion::ray_lengths(camera_);

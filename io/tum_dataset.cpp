@@ -117,7 +117,9 @@ TumDataset::TumDataset(const std::string& directory, const CameraIntrinsics& cam
 
   // Built once per dataset when the camera has distortion coefficients.
   if (camera_.has_distortion())
-    undistortion_ = std::make_unique<DepthUndistortion>(camera_, directory_);
+    undistortion_ = std::make_unique<DepthUndistortion>(
+        camera_, options_.camera_source.empty() ? directory_
+                                                : directory_ + " with " + options_.camera_source);
 }
 
 TumDataset::~TumDataset() = default;

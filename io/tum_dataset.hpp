@@ -15,6 +15,7 @@ namespace jpcr {
 struct TumDatasetOptions {
   double max_time_difference = 0.02;  // s, association window for ground truth and colour
   bool load_color = false;            // also load the associated rgb/ image
+  std::string camera_source;  // where the camera came from, for its errors ("": the directory)
 };
 
 class DepthUndistortion;

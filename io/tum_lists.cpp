@@ -20,6 +20,10 @@ std::vector<std::string> split_fields(const std::string& line) {
   return fields;
 }
 
+// A NUL byte ends a C string: a file name holding one would name another file, and every
+// message quoting it would stop there (the file list's name and line lost with it).
+void check_text_line(const std::string& line, const std::string& name, int number);
+
 bool is_comment_or_blank(const std::string& line) {
   const auto first = line.find_first_not_of(" \t\r");
   return first == std::string::npos || line[first] == '#';
@@ -27,6 +31,11 @@ bool is_comment_or_blank(const std::string& line) {
 
 [[noreturn]] void fail(const std::string& name, int line, const std::string& problem) {
   throw InputError(name + ":" + std::to_string(line) + ": " + problem);
+}
+
+void check_text_line(const std::string& line, const std::string& name, int number) {
+  if (line.find('\0') != std::string::npos)
+    fail(name, number, "holds a NUL byte (a binary file, not a text list?)");
 }
 
 double parse_timestamp(const std::string& token, const std::string& name, int line) {
@@ -60,6 +69,7 @@ std::vector<ListEntry> parse_file_list(const std::string& text, const std::strin
   int number = 0;
   while (std::getline(in, line)) {
     ++number;
+    check_text_line(line, name, number);
     if (is_comment_or_blank(line)) continue;
     const std::vector<std::string> fields = split_fields(line);
     if (fields.size() < 2) fail(name, number, "expected 'timestamp filename'");
@@ -82,6 +92,7 @@ Trajectory parse_trajectory(const std::string& text, const std::string& name) {
   int number = 0;
   while (std::getline(in, line)) {
     ++number;
+    check_text_line(line, name, number);
     if (is_comment_or_blank(line)) continue;
     const std::vector<std::string> fields = split_fields(line);
     if (fields.size() != 8) {

@@ -156,6 +156,19 @@ TEST(TumDataset, DistortionThatLosesTheImageIsRefused) {
               std::string::npos)
         << e.what();
   }
+  // Through open_dataset the message says the camera was the caller's (--config), not the
+  // dataset's own.
+  const std::string error = [&] {
+    try {
+      open_dataset(kFr1, fr1);
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string("<no error>");
+  }();
+  EXPECT_NE(error.find(" with the camera given (--config): the camera's distortion coefficients"),
+            std::string::npos)
+      << error;
   fr1.distortion = {-0.5, 0.0, 0.0, 0.0, 0.0};  // strong barrel: the corners, not the image
   EXPECT_NO_THROW(TumDataset(kFr1, fr1));
 }

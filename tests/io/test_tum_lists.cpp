@@ -60,6 +60,17 @@ TEST(FileList, RejectsUnsortedDuplicateAndMalformedLinesNamingFileAndLine) {
             std::string::npos);
   EXPECT_NE(error_of([] { parse_file_list("nan a.png\n", "d.txt"); }).find("not finite"),
             std::string::npos);
+  // A NUL byte would cut the file name, and every message quoting it, short.
+  const std::string nul(
+      "0 a.png\n0.1 depth/0.0\0"
+      "33.png\n",
+      29);
+  EXPECT_NE(error_of([&] { parse_file_list(nul, "d.txt"); }).find("d.txt:2: holds a NUL byte"),
+            std::string::npos);
+  EXPECT_NE(error_of([&] {
+              parse_trajectory(std::string("0 0 0 0 0 0 0 1\0\n", 17), "gt.txt");
+            }).find("gt.txt:1: holds a NUL byte"),
+            std::string::npos);
 }
 
 TEST(ParseDouble, TakesDecimalAndScientificTokensWhole) {

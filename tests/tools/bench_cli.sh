@@ -17,4 +17,11 @@ for tool in bench_curvature bench_joint bench_synthetic bench_icp_bundle; do
   expect 0 "^BM_" -- "$bin" --benchmark_list_tests=true
 done
 [ "$found" = 1 ] || { echo "no benchmark tool built in $build/tools/bench"; exit 1; }
+# jpcr_long_run's command-line mistakes are usage errors too, named by their option.
+long_run=$build/tools/bench/jpcr_long_run
+if [ -x "$long_run" ]; then
+  expect 2 "--width and --height must be in 1..16384 px" -- "$long_run" --frames 20 --width 0
+  expect 2 "--noise: noise 'range:200'" -- "$long_run" --frames 20 --noise range:200
+  expect 2 "--seed must be a non-negative integer" -- "$long_run" --frames 20 --seed -1
+fi
 exit $fail

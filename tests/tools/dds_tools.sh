@@ -92,6 +92,15 @@ expect 0 "frames 7..7" -- "$play" --dataset "$tum" --config "$cam" --frames 7 --
 expect 2 "rate must be in 0.001..1e6" -- "$play" --dataset "$tum" --rate 0
 expect 2 "rate must be in 0.001..1e6" -- "$play" --dataset "$tum" --rate 1e-12
 expect 2 "wait-subscribers must be 0..86400" -- "$play" --dataset "$tum" --wait-subscribers 1e10
+expect 2 "timeout must be 0..86400 s (0: no limit)" -- "$echo_bin" rt/x --count 1 --timeout 1e999
+expect 0 "warning: --rate has no effect with --as-fast-as-possible" -- "$play" --dataset "$tum" \
+  --config "$cam" --frames 0 --as-fast-as-possible --rate 2 --wait-subscribers 0 --domain $domain
+# A timestamp far past the first frame's is refused, not a wait of years (or, past 292 years, an
+# overflow into no wait at all): the frames before it are published.
+mkdir -p "$tmp/far" && ln -s "$tum/depth" "$tmp/far/depth"
+awk '!/^#/ { n++; if (n == 2) $1 = "1e300"; print; if (n == 2) exit }' "$tum/depth.txt" > "$tmp/far/depth.txt"
+expect 1 "far: frame 1 is stamped 1e+300 s after frame 0: playing it at a rate of 1 would wait" -- \
+  "$play" --dataset "$tmp/far" --config "$cam" --wait-subscribers 0 --domain $domain
 expect 2 "domain must be in 0..232" -- "$echo_bin" rt/x --domain 300
 expect 2 "TOPIC: '/jpcr/odom' is a ROS name; its DDS topic is 'rt/jpcr/odom'" -- "$echo_bin" /jpcr/odom
 expect 2 "TOPIC: 'rt/jpcr/od-om' holds a character other than" -- "$echo_bin" rt/jpcr/od-om

@@ -158,7 +158,8 @@ expect 2 "--method: unknown method 'bundle'" -- "$node" --method bundle
 expect 2 "--window must be in" -- "$node" --window 1
 expect 2 "--max-frames must be >= 0" -- "$node" --max-frames -1
 expect 2 "--max-frames is the front end's" -- "$node" --role backend --max-frames 5
-expect 2 "--idle-timeout must be >= 0" -- "$node" --idle-timeout -1
+expect 2 "--idle-timeout must be 0..86400 s" -- "$node" --idle-timeout -1
+expect 2 "--idle-timeout must be 0..86400 s" -- "$node" --idle-timeout 1e999
 expect 2 "--flush-timeout must be 0..86400 s" -- "$node" --flush-timeout inf
 expect 2 "--backend-wait must be 0..86400 s" -- "$node" --backend-wait 1e300
 expect 2 "domain must be in 0..232" -- "$node" --domain 300

@@ -99,6 +99,12 @@ expect 0 "warning: --device has no effect: method icp-ftf runs on the CPU" -- "$
 expect 0 "icp-ftf" -- "$run" --dataset "$tmp/seq" --method icp-ftf --out "$tmp/icp"
 n=$(ls "$tmp/icp/curvature" | wc -l)
 [ "$n" = 0 ] || { echo "FAIL: icp-ftf wrote $n curvature maps"; fail=1; }
+# Images wider than the quadric pattern can be scaled to (s = 66 px at 14000 wide): refused for
+# the methods that fit quadrics, before any frame; ICP-ftf fits none and runs.
+expect 0 "wrote 2 frames" -- "$synth" --size 14000x40 --frames 2 --out "$tmp/wide"
+expect 1 "quadric: pattern .* scaled to 14000 px wide" -- "$run" --dataset "$tmp/wide" \
+  --method j-ftf --out "$tmp/wide_ftf"
+expect 0 "wrote 2 poses" -- "$run" --dataset "$tmp/wide" --method icp-ftf --out "$tmp/wide_icp"
 
 # Outputs are written whole or not at all (io/staged_output.hpp). A second run into the same
 # OUT replaces every output of the first: icp-ftf writes no map, so j-ftf's four must be gone,

@@ -34,6 +34,7 @@
 #include "cli/arguments.hpp"
 #include "cli/pipeline_options.hpp"
 #include "jpcr/backend/keyframe_pipeline.hpp"
+#include "jpcr/io/synthetic_noise.hpp"
 #include "jpcr/io/synthetic_sequence.hpp"
 #include "jpcr/quadric/error.hpp"
 
@@ -140,10 +141,19 @@ int long_run_main(int argc, char** argv) {
     SyntheticSequenceOptions o;
     o.scene = args.get("scene");
     o.frames = frames;
-    o.noise = args.get("noise");
+    // Command-line mistakes are usage errors (exit 2), named by their option, as in jpcr_synth.
+    try {
+      o.noise = parse_noise(args.get("noise")).describe();
+    } catch (const InputError& e) {
+      throw cli::UsageError(std::string("--noise: ") + e.what());
+    }
     o.width = args.get_int("width");
     o.height = args.get_int("height");
-    o.seed = static_cast<std::uint64_t>(args.get_int("seed"));
+    if (o.width < 1 || o.width > 16384 || o.height < 1 || o.height > 16384)
+      throw cli::UsageError("--width and --height must be in 1..16384 px");
+    const int seed = args.get_int("seed");
+    if (seed < 0) throw cli::UsageError("--seed must be a non-negative integer");
+    o.seed = static_cast<std::uint64_t>(seed);
     const SyntheticSequence seq = make_synthetic_sequence(o);
     PipelineParams params = cli::pipeline_params_from(args);
     params.keep_history = args.get_flag("keep-history");

@@ -9,9 +9,9 @@
 namespace jpcr::cli {
 
 void check_dataset_run(const Arguments& args, const FrameSource& dataset,
-                       const QuadricParams& quadric) {
+                       const QuadricParams& quadric, bool fits_quadrics) {
   require_output_apart_from(args.get("out"), args.get("dataset"), "--dataset");
-  check_quadric_pattern(args, quadric, dataset.camera().width);
+  if (fits_quadrics) check_quadric_pattern(args, quadric, dataset.camera().width);
 }
 
 void check_quadric_pattern(const Arguments& args, const QuadricParams& quadric, int width) {

@@ -10,10 +10,10 @@
 namespace jpcr::cli {
 
 /// Throws InputError when --out is the --dataset directory itself (writing there would replace
-/// the dataset's own curvature/ ground truth), or when check_quadric_pattern refuses the
-/// dataset's width.
+/// the dataset's own curvature/ ground truth), or, for a run that fits quadrics
+/// (`fits_quadrics`), when check_quadric_pattern refuses the dataset's width.
 void check_dataset_run(const Arguments& args, const FrameSource& dataset,
-                       const QuadricParams& quadric);
+                       const QuadricParams& quadric, bool fits_quadrics = true);
 
 /// Throws InputError when the quadric pattern cannot be scaled to images `width` px wide or then
 /// has fewer samples than min_samples, named with the --params file or "the built-in parameters".

@@ -113,7 +113,9 @@ int run(int argc, char** argv) {
               "odom | pose | path | image | camera_info | keyframe (default: from the topic "
               "name; image otherwise)")
       .option("count", "exit after N samples (0: run until --timeout or Ctrl-C)", "0")
-      .option("timeout", "seconds to listen (0: no limit); fewer than --count samples is an error",
+      .option("timeout",
+              "seconds to listen, up to 86400 (0: no limit); fewer than --count samples is an "
+              "error",
               "0")
       .flag("tum", "with a path: also print its poses as TUM lines (full precision)")
       .flag("best-effort", "subscribe best effort (matches sensor-data publishers too)");
@@ -142,7 +144,9 @@ int run(int argc, char** argv) {
     if (o.count < 0) throw cli::UsageError("--count must be >= 0");
     o.timeout = args.get_double("timeout");
     o.tum = args.get_flag("tum");
-    if (!(o.timeout >= 0.0)) throw cli::UsageError("--timeout must be >= 0");
+    // A finite bound: "inf" or 1e999 would be a listener that never stops, as 0 says on purpose.
+    if (!(o.timeout >= 0.0 && o.timeout <= 86400.0))
+      throw cli::UsageError("--timeout must be 0..86400 s (0: no limit)");
     const DdsConfig dds = cli::dds_config_from(args);
     o.qos.depth = dds.history_depth;
     o.qos.reliable = !args.get_flag("best-effort");

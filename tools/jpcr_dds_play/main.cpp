@@ -12,6 +12,7 @@
 #include "cli/stop_signal.hpp"
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/dds/dds_depth_publisher.hpp"
+#include "jpcr/io/number_format.hpp"
 #include "jpcr/io/open_dataset.hpp"
 #include "jpcr/quadric/error.hpp"
 
@@ -36,7 +37,7 @@ int run(int argc, char** argv) {
   args.required("dataset", "TUM RGB-D directory, jpcr_synth output or MRPT .rawlog")
       .option("config", "camera YAML (default: the dataset's own camera)")
       .option("encoding", "depth encoding: 16UC1 (mm) | 32FC1 (m)", "16UC1")
-      .option("rate", "playback speed relative to the recorded timestamps", "1")
+      .option("rate", "playback speed relative to the recorded timestamps (default: 1)")
       .flag("as-fast-as-possible", "publish without waiting between frames")
       .option("frames",
               "FIRST:LAST, 0-based, LAST excluded (either may be empty), or N for frame N "
@@ -59,7 +60,7 @@ int run(int argc, char** argv) {
     } catch (const InputError& e) {
       throw cli::UsageError(std::string("--encoding: ") + e.what());
     }
-    const double rate = args.get_double("rate");
+    const double rate = args.has("rate") ? args.get_double("rate") : 1.0;
     // Bounded so that the waits they imply fit the clock's duration type (1e10 s overflowed
     // into no wait at all).
     if (!(rate >= 1e-3 && rate <= 1e6)) throw cli::UsageError("--rate must be in 0.001..1e6");
@@ -67,6 +68,8 @@ int run(int argc, char** argv) {
     if (!(wait_seconds >= 0.0 && wait_seconds <= 86400.0))
       throw cli::UsageError("--wait-subscribers must be 0..86400 s");
     const bool fast = args.get_flag("as-fast-as-possible");
+    if (fast && args.has("rate"))
+      std::cerr << "jpcr_dds_play: warning: --rate has no effect with --as-fast-as-possible\n";
     const DdsConfig dds = cli::dds_config_from(args);
     std::optional<CameraIntrinsics> camera;
     if (args.has("config")) camera = load_camera_yaml(args.get("config"));
@@ -92,6 +95,7 @@ int run(int argc, char** argv) {
                 << dds.camera_info_topic << " after " << wait_seconds << " s; publishing anyway\n";
     }
 
+    constexpr double kMaxWait = 86400.0;  // s from the first frame, at --rate
     const Clock::time_point start = Clock::now();
     cli::Progress progress("jpcr_dds_play", start);
     const double t0 = source->timestamp(first);
@@ -99,8 +103,18 @@ int run(int argc, char** argv) {
     for (std::size_t i = first; i < last && !cli::stop_requested(); ++i) {
       const Frame frame = source->load(i);
       if (!fast) {
+        // Past about 292 years the clock's nanoseconds overflow (a gap of 1e300 s was no wait at
+        // all); far before that, a wait of days means timestamps that are no recording's.
+        const double offset = (frame.timestamp - t0) / rate;
+        if (!(offset <= kMaxWait))
+          throw InputError(args.get("dataset") + ": frame " + std::to_string(i) + " is stamped " +
+                           format_double(frame.timestamp - t0) + " s after frame " +
+                           std::to_string(first) + ": playing it at a rate of " +
+                           format_double(rate) + " would wait more than " +
+                           std::to_string(static_cast<long>(kMaxWait)) +
+                           " s (--as-fast-as-possible publishes without waiting)");
         const auto due = start + std::chrono::duration_cast<Clock::duration>(
-                                     std::chrono::duration<double>((frame.timestamp - t0) / rate));
+                                     std::chrono::duration<double>(offset));
         while (Clock::now() < due && !cli::stop_requested())
           std::this_thread::sleep_for(
               std::min<Clock::duration>(due - Clock::now(), std::chrono::milliseconds(50)));

@@ -367,8 +367,8 @@ int node_main(int argc, char** argv) {
       .option("window", "keyframes per J-full / Q-full / ICP-bundle window, 2-16 (default: params)")
       .option("max-frames", "stop after N processed frames (0: no limit; not the back end)", "0")
       .option("idle-timeout",
-              "stop when no input was processed for S seconds after the first one (skipped ones do "
-              "not count; 0: never)",
+              "stop when no input was processed for S seconds (up to 86400) after the first one "
+              "(skipped ones do not count; 0: never)",
               "0")
       .option("flush-timeout",
               "seconds to wait for the readers' acknowledgements at exit (after a signal, also for "
@@ -403,7 +403,9 @@ int node_main(int argc, char** argv) {
           "--max-frames is the front end's; the back end stops at its end of "
           "stream (give it to --role frontend)");
     o.stop.idle_timeout = args.get_double("idle-timeout");
-    if (!(o.stop.idle_timeout >= 0.0)) throw cli::UsageError("--idle-timeout must be >= 0");
+    // A finite bound, as the other timeouts: "inf" would mean what 0 says on purpose.
+    if (!(o.stop.idle_timeout >= 0.0 && o.stop.idle_timeout <= 86400.0))
+      throw cli::UsageError("--idle-timeout must be 0..86400 s (0: never)");
     // Bounded so that they fit the clock's milliseconds (inf became a negative wait: none).
     const double flush_timeout = args.get_double("flush-timeout");
     if (!(flush_timeout >= 0.0 && flush_timeout <= 86400.0))

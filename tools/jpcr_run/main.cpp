@@ -145,7 +145,9 @@ int run_main(int argc, char** argv) {
 #endif
     const KeyframePipeline* self = nullptr;
     const RefinerFactory refiners = device_refiner_factory(device, std::cerr);
-    cli::check_dataset_run(args, *dataset, pipeline.joint.quadric);
+    // ICP-ftf fits no quadrics: a width the pattern cannot take is no reason to refuse it.
+    cli::check_dataset_run(args, *dataset, pipeline.joint.quadric,
+                           pipeline.method != PipelineMethod::kIcpFtf);
     cli::require_not_results_of(args, "summary.json", "jpcr_curvature");
     // Everything is written into a staging directory and moved into OUT at the end: a run that
     // fails leaves OUT as it was, and a run into an earlier run's OUT replaces all its outputs.
