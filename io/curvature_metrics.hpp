@@ -32,7 +32,7 @@ struct CurvatureErrors {
   std::size_t sd_compared = 0;  // such pixels (0: no sd given)
   double sd_rms = 0.0;          // RMS of the sd, 1/m
   double rms_where_sd = 0.0;    // RMS of e over the same pixels, 1/m (near sd_rms: calibrated)
-  double within_2sd = 0.0;      // fraction with e < 2 sd (0.98 for Gaussian errors at sd)
+  double within_2sd = 0.0;      // fraction with e < 2 sd (about 0.98 for Gaussian errors at sd)
 };
 
 /// Accumulates frames; throws InputError when a frame's sizes differ.

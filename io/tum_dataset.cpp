@@ -34,6 +34,9 @@ void read_associations(const std::string& path, std::vector<ListEntry>& depth,
   std::string previous_line;
   for (; std::getline(in, line);) {
     ++number;
+    if (line.find('\0') != std::string::npos)  // it would cut a file name short (tum_lists.cpp)
+      throw InputError(path + ":" + std::to_string(number) +
+                       ": holds a NUL byte (a binary file, not a text list?)");
     const auto first = line.find_first_not_of(" \t\r");
     if (first == std::string::npos || line[first] == '#') {
       previous_line += "\n";  // keeps the list parser's line numbers those of this file

@@ -25,10 +25,10 @@
 // It is comparable with jpcr_eval curvature's "rms".
 //
 // Only where at least kMinInsideFraction of the pixel's samples lie inside the gate: the
-// residuals inside it are then the noise's, truncated at 1.6 σ or more for Gaussian noise (the
-// variance then low by 20 % at most). Where more fall outside, the fit's data are not a sample of
-// the noise: a depth edge or crease in the pattern, or a gate below the noise (the built-in
-// 14 mm under 1 % range noise at 2 m), where the sd would be half the error.
+// residuals inside it are then the noise's, truncated at 1.64 σ or more for Gaussian noise (their
+// variance then low by 38 %, the sd by 21 %, at most). Where more fall outside, the fit's data are
+// not a sample of the noise: a depth edge or crease in the pattern, or a gate below the noise
+// (the built-in 14 mm under 1 % range noise at 2 m), where the sd would be half the error.
 //
 // What it does not describe: a bias (the model's dropped terms, regression dilution under heavy
 // range noise, a fit bent across a crease whose residuals look small), and the other frames'

@@ -330,6 +330,10 @@ TEST(TumDataset, AssociationsErrorsNameTheFilesLine) {
             "depth/1.png\n");
   const std::string error = error_of([&] { TumDataset(dir.path(), tiny_camera()); });
   EXPECT_NE(error.find("associations.txt:5:"), std::string::npos) << error;
+  // A NUL byte in the colour file's name (not parsed as a file list) is refused too.
+  dir.write("associations.txt", std::string("9.99 rgb/a\0.png 10.0 depth/0.png\n", 33));
+  const std::string nul = error_of([&] { TumDataset(dir.path(), tiny_camera()); });
+  EXPECT_NE(nul.find("associations.txt:1: holds a NUL byte"), std::string::npos) << nul;
 }
 
 TEST(DepthPng, SaveLoadRoundTripQuantisesToTheScale) {

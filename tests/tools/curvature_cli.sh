@@ -32,7 +32,8 @@ expect 0 "wrote 1 curvature maps" -- "$curv" --dataset "$tmp/seq" --frames 0 --n
 expect 0 "warning: no curvature sd at .* gate is likely below the depth noise" -- \
   "$curv" --dataset "$tmp/seq" --frames 0 --out "$tmp/it_built_in"
 printf 'quadric:\n  fit:\n    fair_n0_per_range: 0.05\n    gate_per_range: 0.015\n' > "$tmp/matched.yaml"
-out=$("$curv" --dataset "$tmp/seq" --params "$tmp/matched.yaml" --out "$tmp/it_matched" 2>&1)
+out=$("$curv" --dataset "$tmp/seq" --params "$tmp/matched.yaml" --out "$tmp/it_matched" 2>&1) ||
+  { echo "FAIL: the run with the matched gate exited $?: $out"; fail=1; }
 if grep -q "no curvature sd" <<<"$out"; then echo "FAIL: warned with the matched gate: $out"; fail=1; fi
 [ -s "$tmp/it/summary.json" ] || { echo "FAIL: no summary.json"; fail=1; }
 head -c 600 "$tmp/it/ply/0.000000.ply" | grep -q "property float k1" || { echo "FAIL: PLY header"; fail=1; }
@@ -162,6 +163,28 @@ open(sys.argv[1], "wb").write(data)
 PY
 expect 1 "small/curvature/0.000000.npy: the map is 5x4 but its ground truth .*seq/curvature/0.000000.npy is" -- \
   "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/small"
+# An sd map of another size than its curvature map: the sd map is named, not the curvature map.
+mkdir -p "$tmp/sd_small/curvature" "$tmp/sd_small/curvature_sd"
+cp "$tmp/it/curvature/0.000000.npy" "$tmp/sd_small/curvature/"
+python3 - "$tmp/sd_small/curvature_sd/0.000000.npy" <<'PY'
+import sys
+header = "{'descr': '<f4', 'fortran_order': False, 'shape': (4, 5), }"
+header += " " * (63 - (10 + len(header)) % 64) + "\n"
+data = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + bytes(80)
+open(sys.argv[1], "wb").write(data)
+PY
+expect 1 "error: $tmp/sd_small/curvature_sd/0.000000.npy: the sd map is 5x4 but its curvature map is 160x120" -- \
+  "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/sd_small"
+# sd values that are no spread (here -Inf, from a 120x160 map of 0xff800000) are left out and said.
+python3 - "$tmp/sd_small/curvature_sd/0.000000.npy" <<'PY'
+import sys
+header = "{'descr': '<f4', 'fortran_order': False, 'shape': (120, 160), }"
+header += " " * (63 - (10 + len(header)) % 64) + "\n"
+data = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode()
+open(sys.argv[1], "wb").write(data + b"\x00\x00\x80\xff" * (120 * 160))
+PY
+expect 0 "warning: 19200 sd pixels of .*sd_small/curvature_sd are +-Inf or negative" -- \
+  "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/sd_small"
 # A map whose stamp has no ground truth is not compared, and said so.
 cp "$tmp/inf/curvature/0.000000.npy" "$tmp/inf/curvature/99.000000.npy"
 expect 0 "warning: 1 of 2 maps of .*inf have no ground truth of their stamp" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/inf"

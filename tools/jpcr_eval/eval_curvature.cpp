@@ -1,5 +1,6 @@
 // jpcr_eval curvature: RMS principal-curvature error and coverage of estimated maps against the
 // ground truth that jpcr_synth writes (DIR/curvature/<stamp>.npy in both directories).
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -55,8 +56,10 @@ int support_radius(const std::string& text, int width) {
 
 // `frames` compared, of `estimated` maps and `with_truth` ground-truth maps: coverage counts the
 // compared frames only, so a method that returns a map for few frames shows it here.
+// `with_sd`: compared maps with an sd map (its fields are written then, even when every sd of
+// the compared pixels was withheld).
 void write_json(std::ostream& out, const CurvatureErrors& e, std::size_t estimated,
-                std::size_t with_truth) {
+                std::size_t with_truth, std::size_t with_sd) {
   JsonWriter json(out);
   json.begin_object()
       .field("frames", e.frames)
@@ -70,8 +73,9 @@ void write_json(std::ostream& out, const CurvatureErrors& e, std::size_t estimat
       .field("compared_pixels", e.compared)
       .field("gt_valid_pixels", e.gt_valid)
       .field("support_radius_px", e.support_radius);
-  if (e.sd_compared > 0)  // the estimate has sd maps (jpcr_run, jpcr_curvature with Quad IT)
-    json.field("sd_compared_pixels", e.sd_compared)
+  if (with_sd > 0)  // the estimate has sd maps (jpcr_run, jpcr_curvature with Quad IT)
+    json.field("sd_maps", with_sd)
+        .field("sd_compared_pixels", e.sd_compared)
         .field("sd_rms", e.sd_rms)
         .field("rms_where_sd", e.rms_where_sd)
         .field("within_2sd", e.within_2sd);
@@ -117,6 +121,7 @@ int run_curvature(int argc, char** argv) {
     std::size_t unordered = 0;  // κ1 < κ2: another convention (swapped channels, flipped sign)
     std::size_t unmatched = 0;  // estimated maps whose stamp has no ground truth: not compared
     std::size_t with_sd = 0;    // compared maps with an sd map
+    std::size_t bad_sd = 0;     // sd pixels at ±Inf or below 0: left out, and said so
     for (const std::string& stamp : est) {
       if (!gt.count(stamp)) {
         ++unmatched;
@@ -127,6 +132,8 @@ int run_curvature(int argc, char** argv) {
       const CurvatureImage truth = read_curvature_npy(gt_file);
       if (!acc) acc.emplace(support_radius(support, truth.width()));
       const std::string est_file = (fs::path(args.get("est")) / name).string();
+      const fs::path sd_file = fs::path(args.get("est")) / "curvature_sd" / (stamp + ".npy");
+      std::error_code ec;
       try {
         const CurvatureImage estimate = read_curvature_npy(est_file);
         if (estimate.width() != truth.width() || estimate.height() != truth.height())
@@ -138,23 +145,21 @@ int run_curvature(int argc, char** argv) {
           infinite += k.array().isInf().any() ? 1 : 0;
           unordered += k.x() < k.y() ? 1 : 0;  // false with a NaN
         }
-        // An sd map is optional per stamp (maps from Quad LS have none).
-        const fs::path sd_file = fs::path(args.get("est")) / "curvature_sd" / (stamp + ".npy");
-        std::error_code ec;
+        // An sd map is optional per stamp (maps from Quad LS have none). Its errors name it,
+        // not the curvature map (below).
         std::optional<Image<float>> sd;
         if (fs::exists(sd_file, ec)) {
           sd = read_curvature_sd_npy(sd_file.string());
           ++with_sd;
+          for (const float s : *sd)
+            bad_sd += std::isinf(s) || s < 0.0f ? 1 : 0;  // NaN: withheld, not bad
         }
-        try {
-          acc->add(truth, estimate, sd ? &*sd : nullptr);
-        } catch (const InputError& e) {
-          if (!sd) throw;
-          throw InputError(sd_file.string() + ": " + e.what());
-        }
+        acc->add(truth, estimate, sd ? &*sd : nullptr);
       } catch (const InputError& e) {  // name the map, not only the problem (once)
         const std::string what = e.what();
-        if (what.rfind(est_file + ": ", 0) == 0) throw;
+        if (what.rfind(est_file + ": ", 0) == 0 || what.rfind(sd_file.string() + ": ", 0) == 0)
+          throw;
+        if (what.rfind("the sd map is ", 0) == 0) throw InputError(sd_file.string() + ": " + what);
         throw InputError(est_file + ": " + what);
       }
     }
@@ -162,6 +167,10 @@ int run_curvature(int argc, char** argv) {
       std::cerr << "jpcr_eval curvature: warning: " << unmatched << " of " << est.size()
                 << " maps of " << args.get("est") << " have no ground truth of their stamp in "
                 << args.get("gt") << "; they are not compared\n";
+    if (bad_sd > 0)
+      std::cerr << "jpcr_eval curvature: warning: " << bad_sd << " sd pixels of " << args.get("est")
+                << "/curvature_sd are +-Inf or negative; they are left out (an sd map marks "
+                   "pixels without one with NaN)\n";
     if (infinite > 0)
       std::cerr << "jpcr_eval curvature: warning: " << infinite << " pixels of " << args.get("est")
                 << " are +-Inf; they count as missing (a map marks invalid pixels with NaN)\n";
@@ -179,11 +188,12 @@ int run_curvature(int argc, char** argv) {
                        " (" + std::to_string(e.gt_valid) + " valid ground-truth pixels)");
     if (args.has("out")) {
       ensure_parent_directory(args.get("out"));
-      write_file_atomically(args.get("out"),
-                            [&](std::ostream& out) { write_json(out, e, est.size(), gt.size()); });
+      write_file_atomically(args.get("out"), [&](std::ostream& out) {
+        write_json(out, e, est.size(), gt.size(), with_sd);
+      });
     }
     if (args.get_flag("json")) {
-      write_json(std::cout, e, est.size(), gt.size());
+      write_json(std::cout, e, est.size(), gt.size(), with_sd);
     } else {
       std::printf("frames: %zu compared (%zu estimated, %zu with ground truth)\n", e.frames,
                   est.size(), gt.size());
@@ -192,12 +202,17 @@ int run_curvature(int argc, char** argv) {
       std::printf("coverage %.2f %% (%zu of %zu ground-truth pixels of the compared frames%s)\n",
                   100.0 * e.coverage, e.compared, e.gt_valid,
                   e.support_radius > 0 ? ", interior only" : "");
-      if (e.sd_compared > 0)
+      if (with_sd > 0 && e.sd_compared == 0)
+        std::printf("sd (%zu of the frames' maps): none at the compared pixels (withheld)\n",
+                    with_sd);
+      else if (e.sd_compared > 0) {
+        char ratio[32] = "-";  // an sd of 0 everywhere: no ratio
+        if (e.sd_rms > 0.0) std::snprintf(ratio, sizeof ratio, "%.3f", e.rms_where_sd / e.sd_rms);
         std::printf(
             "sd (%zu of the frames' maps, %zu pixels): rms sd %.4f 1/m against rms error "
-            "%.4f 1/m there (ratio %.3f), %.1f %% of errors within 2 sd\n",
-            with_sd, e.sd_compared, e.sd_rms, e.rms_where_sd, e.rms_where_sd / e.sd_rms,
-            100.0 * e.within_2sd);
+            "%.4f 1/m there (ratio %s), %.1f %% of errors within 2 sd\n",
+            with_sd, e.sd_compared, e.sd_rms, e.rms_where_sd, ratio, 100.0 * e.within_2sd);
+      }
     }
     return 0;
   });

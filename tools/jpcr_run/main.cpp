@@ -79,7 +79,7 @@ int run_main(int argc, char** argv) {
                 "output directory (created; the outputs of an earlier run there are replaced, "
                 "other files are left alone; nothing is written when the run fails)")
       .flag("ply", "also write a PLY point cloud per keyframe")
-      .flag("no-sd", "write no curvature_sd/ maps (each costs about one Quad IT pass)");
+      .flag("no-sd", "write no curvature_sd/ maps (each takes about as long as a Quad IT fit)");
   cli::add_device_option(args);
 #ifdef JPCR_HAVE_DDS
   args.flag("dds",
