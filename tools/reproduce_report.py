@@ -221,12 +221,55 @@ def curvature_errors(cell, bin_dir, only=None, support="0", tag="all"):
         for s in common:
             os.symlink(os.path.abspath(os.path.join(d, "curvature", s + ".npy")),
                        os.path.join(sel, "curvature", s + ".npy"))
+            # The map's sd (jpcr_run, jpcr_curvature with Quad IT): jpcr_eval then scores it too.
+            sd = os.path.join(d, "curvature_sd", s + ".npy")
+            if os.path.exists(sd):
+                os.makedirs(os.path.join(sel, "curvature_sd"), exist_ok=True)
+                os.symlink(os.path.abspath(sd), os.path.join(sel, "curvature_sd", s + ".npy"))
         res = subprocess.run([os.path.join(bin_dir, "jpcr_eval"), "curvature", "--gt", seq,
                               "--est", sel, "--support", support, "--json"],
                              capture_output=True, text=True)
         if res.returncode == 0:
             out[m] = json.loads(res.stdout)
     return out
+
+
+def curvature_sd_section(w, a, curv):
+    """How well each map's per-pixel sd (README, "Curvature spread") describes its error, on
+    the frames of the curvature table (`curv`: all pixels) and on their interior pixels."""
+    methods = ["quad_it", "j-ftf", "j-full"]
+    rows = []
+    for s in SCENES:
+        for k in NOISES:
+            cell = os.path.join(a.runs, s, f"range{k}")
+            interior = curvature_errors(cell, a.bin, None, "pattern", "all_interior")
+            for m in methods:
+                e_all, e_int = curv[s, k].get(m, {}), interior.get(m, {})
+                if e_all.get("sd_maps"):
+                    rows.append((s, k, m, e_all, e_int))
+    if not rows:
+        return
+    w("### Curvature sd against the error (not in the paper)\n")
+    w("Each map's per-pixel sd (`curvature_sd/`, README \"Curvature spread\": the spread of "
+      "each fit from its own samples) against its error, on the frames of the first table: RMS "
+      "error / RMS sd over the pixels with an sd (1: the sd describes the error; above 1: a "
+      "bias it does not see), the share of errors within 2 sd (about 98 % for Gaussian errors at "
+      "the sd) and the share of the compared pixels that have an sd. Interior pixels as in the "
+      "tables above.\n")
+    w("| scene | noise | map | all pixels: error / sd | within 2 sd | with an sd | "
+      "interior: error / sd | within 2 sd |")
+    w("|---|---|---|---|---|---|---|---|")
+
+    def ratio(e):
+        return e["rms_where_sd"] / e["sd_rms"] if e.get("sd_rms") else None
+
+    for s, k, m, e_all, e_int in rows:
+        share = e_all["sd_compared_pixels"] / e_all["compared_pixels"] \
+            if e_all.get("compared_pixels") else None
+        w(f"| {s} | {k} % | {LABEL[m]} | {fmt(ratio(e_all), '.2f')} | "
+          f"{fmt(e_all.get('within_2sd'), '.1%')} | {fmt(share, '.0%')} | "
+          f"{fmt(ratio(e_int), '.2f')} | {fmt(e_int.get('within_2sd'), '.1%')} |")
+    w("")
 
 
 def trajectory_errors(bin_dir, gt, run_dir):
@@ -604,6 +647,7 @@ def main():
                 fmt(c[m]["rms"] if m in c else None, ".3f") for m in three) +
               f" | {'yes' if holds else ('no' if holds is not None else '–')} |")
     w("")
+    curvature_sd_section(w, a, curv)
     fig, axes = plt.subplots(2, len(SCENES), figsize=(4.2 * len(SCENES), 6.4), squeeze=False)
     for row, (title, rms_of) in enumerate([
             ("all compared frames and pixels", lambda s, k, m: curv[s, k].get(m, {}).get("rms")),

@@ -8,7 +8,7 @@ fail=0
 "$src/tools/reproduce.sh" --quick --no-build --build "$build" --out "$tmp/report" \
   > "$tmp/out.txt" 2>&1 || { echo "FAIL: reproduce.sh --quick exited $?"; fail=1; }
 grep "reproduce_report\|FAILED\|failed" "$tmp/out.txt"
-for section in "Pose accuracy" "Curvature accuracy" "Kinect-like noise" "Bias and spread over noise" \
+for section in "Pose accuracy" "Curvature accuracy" "Curvature sd against the error" "Kinect-like noise" "Bias and spread over noise" \
   "Drift along a straight rail" "Real data" "OpenCV peer" "Curvature maps" "Timings" "paper's claims"; do
   grep -q "$section" "$tmp/report/index.md" 2>/dev/null || { echo "FAIL: no '$section'"; fail=1; }
 done
