@@ -290,8 +290,8 @@ TEST(CurvatureSpread, IsNaNWhereTheMapHasNoFitAndRefusesAnotherSize) {
       }
   EXPECT_TRUE(std::isnan(curvature_spread_at(map, vertices, pattern, params.fit, -1, 0)));
   const VertexMap smaller(vertices.width() / 2, vertices.height() / 2);
-  const std::string message =
-      test::input_error_of([&] { curvature_spread(map, smaller, pattern, params.fit); });
+  const std::string message = test::input_error_of(
+      [&] { curvature_spread(fitted.map, smaller, fitted.pattern, params.fit); });
   EXPECT_NE(message.find("320x240"), std::string::npos) << message;
   EXPECT_NE(message.find("160x120"), std::string::npos) << message;
 }

@@ -153,36 +153,29 @@ open(sys.argv[2], "wb").write(d)
 PY
 expect 0 "warning: 100 pixels of .*inf are +-Inf" -- "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/inf"
 # A map of another size than its ground truth: both files named (plain python3, no numpy).
-mkdir -p "$tmp/small/curvature"
-python3 - "$tmp/small/curvature/0.000000.npy" <<'PY'
+# float32_npy FILE SHAPE DATA: a float32 .npy of SHAPE ("(4, 5)") holding the bytes of the Python
+# expression DATA, written by plain python3 (no numpy).
+float32_npy() {
+  python3 - "$@" <<'PY'
 import sys
-header = "{'descr': '<f4', 'fortran_order': False, 'shape': (4, 5, 2), }"
+header = "{'descr': '<f4', 'fortran_order': False, 'shape': %s, }" % sys.argv[2]
 header += " " * (63 - (10 + len(header)) % 64) + "\n"
-data = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + bytes(160)
-open(sys.argv[1], "wb").write(data)
+data = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode()
+open(sys.argv[1], "wb").write(data + eval(sys.argv[3]))
 PY
+}
+mkdir -p "$tmp/small/curvature"
+float32_npy "$tmp/small/curvature/0.000000.npy" "(4, 5, 2)" "bytes(160)"
 expect 1 "small/curvature/0.000000.npy: the map is 5x4 but its ground truth .*seq/curvature/0.000000.npy is" -- \
   "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/small"
 # An sd map of another size than its curvature map: the sd map is named, not the curvature map.
 mkdir -p "$tmp/sd_small/curvature" "$tmp/sd_small/curvature_sd"
 cp "$tmp/it/curvature/0.000000.npy" "$tmp/sd_small/curvature/"
-python3 - "$tmp/sd_small/curvature_sd/0.000000.npy" <<'PY'
-import sys
-header = "{'descr': '<f4', 'fortran_order': False, 'shape': (4, 5), }"
-header += " " * (63 - (10 + len(header)) % 64) + "\n"
-data = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode() + bytes(80)
-open(sys.argv[1], "wb").write(data)
-PY
+float32_npy "$tmp/sd_small/curvature_sd/0.000000.npy" "(4, 5)" "bytes(80)"
 expect 1 "error: $tmp/sd_small/curvature_sd/0.000000.npy: the sd map is 5x4 but its curvature map is 160x120" -- \
   "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/sd_small"
 # sd values that are no spread (here -Inf, from a 120x160 map of 0xff800000) are left out and said.
-python3 - "$tmp/sd_small/curvature_sd/0.000000.npy" <<'PY'
-import sys
-header = "{'descr': '<f4', 'fortran_order': False, 'shape': (120, 160), }"
-header += " " * (63 - (10 + len(header)) % 64) + "\n"
-data = b"\x93NUMPY\x01\x00" + len(header).to_bytes(2, "little") + header.encode()
-open(sys.argv[1], "wb").write(data + b"\x00\x00\x80\xff" * (120 * 160))
-PY
+float32_npy "$tmp/sd_small/curvature_sd/0.000000.npy" "(120, 160)" 'b"\x00\x00\x80\xff" * (120 * 160)'
 expect 0 "warning: 19200 sd pixels of .*sd_small/curvature_sd are +-Inf or negative" -- \
   "$eval_bin" curvature --gt "$tmp/seq" --est "$tmp/sd_small"
 # A map whose stamp has no ground truth is not compared, and said so.
