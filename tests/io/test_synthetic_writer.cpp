@@ -133,7 +133,8 @@ TEST(SyntheticWriter, ForceRefusesResultsAndRecordedDatasets) {
       {"run", "holds jpcr_run's results (report.json)"},
       {"curv", "holds jpcr_curvature's results (summary.json)"},
       {"recorded", "holds a dataset that jpcr_synth did not write"}};
-  for (const auto& [out, message] : cases) {
+  for (const auto& c : cases) {  // no structured binding: clang 14 cannot capture one
+    const char *out = c.first, *message = c.second;
     const std::string error =
         test::input_error_of([&] { write_synthetic_sequence(seq, dir.file(out), force); });
     EXPECT_NE(error.find(message), std::string::npos) << error;
