@@ -50,9 +50,11 @@ class CurvatureWriter {
  public:
   CurvatureWriter(std::string directory, bool ply, const CurvatureColorParams& colors = {},
                   std::optional<QuadricParams> spread = std::nullopt);
-  /// Writes curvature/STAMP.npy, curvature_png/STAMP.png (and ply/STAMP.ply). Throws InputError
-  /// for a stamp already written, rather than overwrite that map.
-  void write(const std::string& stamp, const QuadricMap& map, const VertexMap& vertices) const;
+  /// Writes curvature/STAMP.npy, curvature_png/STAMP.png (and curvature_sd/STAMP.npy,
+  /// ply/STAMP.ply). Returns the sd map it wrote (empty without `spread`), for a caller that also
+  /// publishes it. Throws InputError for a stamp already written, rather than overwrite that map.
+  Image<float> write(const std::string& stamp, const QuadricMap& map,
+                     const VertexMap& vertices) const;
   std::size_t written() const { return written_; }
   /// Over the maps written with `spread`: their valid pixels, and those of them without an sd
   /// (curvature_spread withholds it where the gate drops over a tenth of the samples).

@@ -49,8 +49,8 @@ CurvatureWriter::CurvatureWriter(std::string directory, bool ply,
   if (ply_) ensure_directory(directory_ + "/ply");
 }
 
-void CurvatureWriter::write(const std::string& stamp, const QuadricMap& map,
-                            const VertexMap& vertices) const {
+Image<float> CurvatureWriter::write(const std::string& stamp, const QuadricMap& map,
+                                    const VertexMap& vertices) const {
   // Stamps are timestamps at 1 us (format_stamp): frames closer than that would overwrite
   // each other's maps.
   if (!stamps_.insert(stamp).second)
@@ -58,9 +58,9 @@ void CurvatureWriter::write(const std::string& stamp, const QuadricMap& map,
                      " (their frames' timestamps agree to 1 us, the resolution of the names)");
   write_curvature_npy(directory_ + "/curvature/" + stamp + ".npy", map.curvature);
   save_curvature_png(directory_ + "/curvature_png/" + stamp + ".png", map.curvature, colors_);
+  Image<float> sd;
   if (spread_) {
-    const Image<float> sd =
-        curvature_spread(map, vertices, spread_->pattern_for(vertices.width()), spread_->fit);
+    sd = curvature_spread(map, vertices, spread_->pattern_for(vertices.width()), spread_->fit);
     write_curvature_sd_npy(directory_ + "/curvature_sd/" + stamp + ".npy", sd);
     for (std::size_t i = 0; i < sd.size(); ++i)
       if (map.status[i] == QuadricStatus::kValid) {
@@ -70,6 +70,7 @@ void CurvatureWriter::write(const std::string& stamp, const QuadricMap& map,
   }
   if (ply_) write_curvature_ply(directory_ + "/ply/" + stamp + ".ply", vertices, map, colors_);
   ++written_;
+  return sd;
 }
 
 std::string CurvatureWriter::sd_warning() const {

@@ -106,6 +106,7 @@ void read_dds_config(YamlSection yaml, DdsConfig& config) {
   yaml.read("history_depth", config.history_depth);
   yaml.read("image_history_depth", config.image_history_depth);
   yaml.read("keyframe_queue", config.keyframe_queue);
+  yaml.read("curvature_sd", config.curvature_sd);
   std::string reliability = config.input_reliable ? "reliable" : "best_effort";
   yaml.read_choice("input_reliability", reliability, {"reliable", "best_effort"});
   config.input_reliable = reliability == "reliable";

@@ -36,7 +36,10 @@ struct DdsConfig {
                                 // when its paths are incremental (keep_history: false)
   int image_history_depth = 2;  // samples, KEEP_LAST depth of image topics (MB each)
   int keyframe_queue = 32;      // keyframes a split back end holds unread (MB each)
-  bool input_reliable = true;   // depth input QoS: reliable (ROS default) or best effort
+  // Publish each keyframe's curvature sd map (topic curvature_sd, 32FC1; computed per keyframe,
+  // about one Quad IT fit's time: quadric/curvature_spread.hpp).
+  bool curvature_sd = true;
+  bool input_reliable = true;  // depth input QoS: reliable (ROS default) or best effort
   // Depth input history KEEP_ALL (input_history: keep_all), lossless: the reader holds at most
   // image_history_depth images and takes the next only when the caller asks for a frame, so a
   // reliable KEEP_ALL camera (jpcr_dds_play with the same setting) waits for a slow node instead

@@ -1,6 +1,8 @@
 #include "jpcr/io/dds/dds_result_publisher.hpp"
 
 #include <iostream>
+#include <stdexcept>
+#include <string>
 
 #include "jpcr/io/dds/dds_endpoint.hpp"
 #include "jpcr/io/dds/ros_messages.hpp"
@@ -18,13 +20,16 @@ struct DdsResultPublisher::Writers {
         curvature(p, result_topic_name(c, ResultTopic::kCurvature),
                   result_topic_qos(c, ResultTopic::kCurvature)),
         curvature_color(p, result_topic_name(c, ResultTopic::kCurvatureColor),
-                        result_topic_qos(c, ResultTopic::kCurvatureColor)) {}
+                        result_topic_qos(c, ResultTopic::kCurvatureColor)),
+        curvature_sd(p, result_topic_name(c, ResultTopic::kCurvatureSd),
+                     result_topic_qos(c, ResultTopic::kCurvatureSd)) {}
 
   DdsWriter<RosOdometry> odometry;
   DdsWriter<RosPoseStamped> keyframe_pose;
   DdsWriter<RosPath> path;
   DdsWriter<RosImage> curvature;
   DdsWriter<RosImage> curvature_color;
+  DdsWriter<RosImage> curvature_sd;
 };
 
 const char* to_string(ResultTopic topic) {
@@ -39,6 +44,8 @@ const char* to_string(ResultTopic topic) {
       return "curvature";
     case ResultTopic::kCurvatureColor:
       return "curvature_color";
+    case ResultTopic::kCurvatureSd:
+      return "curvature_sd";
   }
   return "?";
 }
@@ -53,6 +60,7 @@ DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic, PathUpdates 
       return DdsQos{true, true, paths == PathUpdates::kWhole ? 1 : config.history_depth};
     case ResultTopic::kCurvature:
     case ResultTopic::kCurvatureColor:
+    case ResultTopic::kCurvatureSd:
       return DdsQos{true, false, config.image_history_depth};
     default:
       return DdsQos{true, false, config.history_depth};
@@ -87,7 +95,12 @@ void DdsResultPublisher::publish_odometry(const StampedPose& pose, const Matrix6
 
 void DdsResultPublisher::publish_keyframe(const StampedPose& pose,
                                           const Image<Eigen::Vector2f>& curvature,
-                                          const ColorImage& color) {
+                                          const ColorImage& color, const Image<float>& sd) {
+  if (!sd.empty() && (sd.width() != curvature.width() || sd.height() != curvature.height()))
+    throw std::invalid_argument("DdsResultPublisher::publish_keyframe: the sd map is " +
+                                std::to_string(sd.width()) + "x" + std::to_string(sd.height()) +
+                                ", the curvature map " + std::to_string(curvature.width()) + "x" +
+                                std::to_string(curvature.height()));
   write(writers_->keyframe_pose, pose_stamped_message(pose, config_.world_frame_id));
   if (!curvature.empty()) {
     const RosImageBuffer k = encode_curvature_image(curvature);
@@ -96,6 +109,10 @@ void DdsResultPublisher::publish_keyframe(const StampedPose& pose,
   if (!color.empty()) {
     const RosImageBuffer c = encode_rgb8_image(color);
     write(writers_->curvature_color, image_message(c, pose.timestamp, config_.camera_frame_id));
+  }
+  if (!sd.empty()) {
+    const RosImageBuffer s = encode_curvature_sd_image(sd);
+    write(writers_->curvature_sd, image_message(s, pose.timestamp, config_.camera_frame_id));
   }
 }
 
@@ -112,7 +129,7 @@ bool DdsResultPublisher::flush(std::chrono::milliseconds timeout) const {
   const Writers& w = *writers_;
   return w.odometry.wait_for_acks(timeout) && w.keyframe_pose.wait_for_acks(timeout) &&
          w.path.wait_for_acks(timeout) && w.curvature.wait_for_acks(timeout) &&
-         w.curvature_color.wait_for_acks(timeout);
+         w.curvature_color.wait_for_acks(timeout) && w.curvature_sd.wait_for_acks(timeout);
 }
 
 int DdsResultPublisher::matched(ResultTopic topic) const {
@@ -127,6 +144,8 @@ int DdsResultPublisher::matched(ResultTopic topic) const {
       return writers_->curvature.matched();
     case ResultTopic::kCurvatureColor:
       return writers_->curvature_color.matched();
+    case ResultTopic::kCurvatureSd:
+      return writers_->curvature_sd.matched();
   }
   return 0;
 }

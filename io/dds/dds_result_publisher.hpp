@@ -7,6 +7,7 @@
 //                                              (keep last history_depth: PathUpdates::kIncremental)
 //   curvature        sensor_msgs/Image 32FC2   reliable, volatile, keep last image_history_depth
 //   curvature_color  sensor_msgs/Image rgb8    reliable, volatile, keep last image_history_depth
+//   curvature_sd     sensor_msgs/Image 32FC1   reliable, volatile, keep last image_history_depth
 //
 // Poses are T_wc (camera to world) with header.frame_id = world_frame_id; images and odom's child
 // frame carry the camera frame: camera_frame_id until set_camera_frame_id names the received
@@ -30,7 +31,14 @@
 
 namespace jpcr {
 
-enum class ResultTopic { kOdometry, kKeyframePose, kPath, kCurvature, kCurvatureColor };
+enum class ResultTopic {
+  kOdometry,
+  kKeyframePose,
+  kPath,
+  kCurvature,
+  kCurvatureColor,
+  kCurvatureSd
+};
 
 /// What a path holds: the whole refined trajectory (each path supersedes the one before, so the
 /// path topic keeps the last one), or the frames made final since the previous path and those
@@ -38,7 +46,7 @@ enum class ResultTopic { kOdometry, kKeyframePose, kPath, kCurvature, kCurvature
 /// does, and the topic keeps history_depth of them for readers that must take each one.
 enum class PathUpdates { kWhole, kIncremental };
 
-/// "odom", "keyframe_pose", "path", "curvature", "curvature_color".
+/// "odom", "keyframe_pose", "path", "curvature", "curvature_color", "curvature_sd".
 const char* to_string(ResultTopic topic);
 /// PREFIX + name.
 std::string result_topic_name(const DdsConfig& config, ResultTopic topic);
@@ -48,7 +56,7 @@ DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic,
 
 class DdsResultPublisher {
  public:
-  /// Creates the five writers; throws DdsError when Cyclone refuses. A sample Cyclone refuses
+  /// Creates the six writers; throws DdsError when Cyclone refuses. A sample Cyclone refuses
   /// later (larger than its MaxSampleSize, out of resources) is not published: it is counted
   /// (writes_failed) and logged to `log` (default std::cerr; the first 10 lines, then one per
   /// 10 s), and publishing goes on: one lost result does not stop the run that makes them.
@@ -61,10 +69,12 @@ class DdsResultPublisher {
 
   /// The front end's pose of a frame with its 6x6 covariance over (x, y, z, rx, ry, rz).
   void publish_odometry(const StampedPose& pose, const Matrix6d& covariance);
-  /// A refined keyframe: its pose, its κ1/κ2 map (1/m, NaN invalid) and, when not empty, the
-  /// map's colour rendering; all stamped with pose.timestamp.
+  /// A refined keyframe: its pose, its κ1/κ2 map (1/m, NaN invalid) and, each when not empty,
+  /// the map's colour rendering and its sd map (1/m, NaN where none; quadric/curvature_spread.hpp);
+  /// all stamped with pose.timestamp. Throws std::invalid_argument when `sd` is not empty and
+  /// differs from `curvature` in size.
   void publish_keyframe(const StampedPose& pose, const Image<Eigen::Vector2f>& curvature,
-                        const ColorImage& color);
+                        const ColorImage& color, const Image<float>& sd = {});
   /// The refined trajectory (all keyframes); late subscribers receive the last one.
   void publish_path(const Trajectory& trajectory);
 

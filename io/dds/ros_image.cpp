@@ -16,6 +16,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "jpcr/io/number_format.hpp"
 #include "jpcr/quadric/error.hpp"
 
 namespace jpcr {
@@ -362,6 +363,21 @@ Image<Eigen::Vector2f> decode_curvature_image(const RosImageView& image,
   return out;
 }
 
+Image<float> decode_curvature_sd_image(const RosImageView& image, const RosImageLimits& limits) {
+  check_image_layout(image, {{"32FC1", 4}}, limits);
+  Image<float> out(static_cast<int>(image.width), static_cast<int>(image.height));
+  read_rows<float>(
+      image, 1, [](float sd, float* o) { *o = sd; }, out.data());
+  for (int v = 0; v < out.height(); ++v)
+    for (int u = 0; u < out.width(); ++u) {
+      const float sd = out(u, v);
+      if (!std::isnan(sd) && !(sd >= 0.0f && std::isfinite(sd)))
+        reject("curvature sd at pixel (" + std::to_string(u) + ", " + std::to_string(v) + ") is " +
+               format_double(sd) + ": an sd is a finite value >= 0, or NaN for none");
+    }
+  return out;
+}
+
 ColorImage decode_rgb8_image(const RosImageView& image, const RosImageLimits& limits) {
   check_image_layout(image, {{"rgb8", 3}}, limits);
   static_assert(sizeof(Rgb8) == 3, "Rgb8 must be packed");
@@ -406,6 +422,13 @@ RosImageBuffer encode_rgb8_image(const ColorImage& color) {
     b.data.push_back(c.g);
     b.data.push_back(c.b);
   }
+  return b;
+}
+
+RosImageBuffer encode_curvature_sd_image(const Image<float>& sd) {
+  RosImageBuffer b = empty_buffer(sd.width(), sd.height(), "32FC1", 4);
+  for (const float s : sd)
+    append_bytes(b.data, s);
   return b;
 }
 

@@ -125,6 +125,9 @@ Frame decode_depth_frame(const RosImageView& image, const RosStamp& stamp,
 Image<Eigen::Vector2f> decode_curvature_image(const RosImageView& image,
                                               const RosImageLimits& limits);
 ColorImage decode_rgb8_image(const RosImageView& image, const RosImageLimits& limits);
+/// A 32FC1 curvature sd map (1/m per pixel, NaN where none: curvature_spread.hpp). Throws
+/// InputError naming the first pixel whose value is negative or infinite: not an sd.
+Image<float> decode_curvature_sd_image(const RosImageView& image, const RosImageLimits& limits);
 
 /// Encoders for sending; little-endian, rows packed (step = width x bytes per pixel). Depth in
 /// 16UC1 is rounded to whole millimetres; depths that do not fit (not finite, <= 0, > 65.535 m)
@@ -133,6 +136,8 @@ ColorImage decode_rgb8_image(const RosImageView& image, const RosImageLimits& li
 RosImageBuffer encode_depth_image(const DepthImage& depth, DepthEncoding encoding);
 RosImageBuffer encode_curvature_image(const Image<Eigen::Vector2f>& curvature);
 RosImageBuffer encode_rgb8_image(const ColorImage& color);
+/// 32FC1 with every value as it is (NaN stays NaN: no sd there).
+RosImageBuffer encode_curvature_sd_image(const Image<float>& sd);
 
 /// A CameraInfo for the intrinsics: K and P from fx, fy, cx, cy, R = I, "plumb_bob" D.
 RosCameraInfo encode_camera_info(const CameraIntrinsics& camera);

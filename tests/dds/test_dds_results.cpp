@@ -9,6 +9,7 @@
 #include <optional>
 #include <random>
 #include <sstream>
+#include <stdexcept>
 #include <vector>
 
 #include "dds_test_config.hpp"
@@ -26,10 +27,10 @@ constexpr milliseconds kTimeout{5000};
 
 // Waits for and takes one sample, converted by `convert` while the loan is valid.
 template <typename Msg, typename Convert>
-auto take_one(const DdsReader<Msg>& reader, Convert convert)
+auto take_one(const DdsReader<Msg>& reader, Convert convert, milliseconds timeout = kTimeout)
     -> std::optional<decltype(convert(std::declval<const Msg&>()))> {
   std::optional<decltype(convert(std::declval<const Msg&>()))> out;
-  const auto deadline = std::chrono::steady_clock::now() + kTimeout;
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
   while (!out && std::chrono::steady_clock::now() < deadline) {
     reader.wait(milliseconds(100));
     reader.take([&](const Msg& m) {
@@ -68,6 +69,9 @@ TEST_F(DdsResults, TopicNamesAndQosFollowRosConventions) {
   EXPECT_EQ(result_topic_name(DdsConfig{}, ResultTopic::kOdometry), "rt/jpcr/odom");
   EXPECT_EQ(result_topic_name(DdsConfig{}, ResultTopic::kCurvatureColor),
             "rt/jpcr/curvature_color");
+  EXPECT_EQ(result_topic_name(DdsConfig{}, ResultTopic::kCurvatureSd), "rt/jpcr/curvature_sd");
+  const DdsQos sd = result_topic_qos(DdsConfig{}, ResultTopic::kCurvatureSd);
+  EXPECT_TRUE(sd.reliable && !sd.transient_local && sd.depth == DdsConfig{}.image_history_depth);
   const DdsQos path = result_topic_qos(DdsConfig{}, ResultTopic::kPath);
   EXPECT_TRUE(path.reliable && path.transient_local && path.depth == 1);
   DdsConfig deep;
@@ -201,6 +205,37 @@ TEST_F(DdsResults, CurvatureMap640x480ArrivesBitExact) {
       take_one(color, [](const RosImage& m) { return decode_rgb8_image(image_view_of(m), {}); });
   ASSERT_TRUE(got_color);
   EXPECT_EQ(std::memcmp(got_color->data(), c.data(), c.size() * sizeof(Rgb8)), 0);
+}
+
+TEST_F(DdsResults, CurvatureSdArrivesBitExactWithTheMapsStamp) {
+  auto sd_reader = reader<RosImage>(ResultTopic::kCurvatureSd);
+  ASSERT_TRUE(test::eventually([&] { return publisher_.matched(ResultTopic::kCurvatureSd) == 1; }));
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> uniform(0.0f, 4.0f);
+  const Image<Eigen::Vector2f> k(320, 240, Eigen::Vector2f(0.5f, -2.0f));
+  Image<float> sd(320, 240, 0.0f);
+  for (std::size_t i = 0; i < sd.size(); ++i)
+    sd[i] = i % 13 == 0 ? std::numeric_limits<float>::quiet_NaN() : uniform(rng);
+  // An sd map the size of another map is a caller's mistake, named before anything is sent.
+  EXPECT_THROW(publisher_.publish_keyframe(some_pose(5.0), k, {}, Image<float>(32, 24, 1.0f)),
+               std::invalid_argument);
+  publisher_.publish_keyframe(some_pose(5.5), k, {}, sd);
+  const auto got = take_one(sd_reader, [](const RosImage& m) {
+    EXPECT_STREQ(m.encoding, "32FC1");
+    EXPECT_EQ(m.header.stamp.sec, 5);
+    EXPECT_EQ(m.header.stamp.nanosec, 500000000u);
+    EXPECT_STREQ(m.header.frame_id, "camera_depth_optical_frame");
+    return decode_curvature_sd_image(image_view_of(m), {});
+  });
+  ASSERT_TRUE(got);
+  ASSERT_EQ(got->width(), 320);
+  ASSERT_EQ(got->height(), 240);
+  EXPECT_EQ(std::memcmp(got->data(), sd.data(), sd.size() * sizeof(float)), 0);
+  // Without an sd map nothing goes out on the topic.
+  publisher_.publish_keyframe(some_pose(6.0), k, {});
+  EXPECT_FALSE(take_one(
+      sd_reader, [](const RosImage&) { return 0; }, milliseconds(500)));
+  EXPECT_EQ(publisher_.writes_failed(), 0u);
 }
 
 TEST_F(DdsResults, KeyframeMessageRoundTrips) {

@@ -2,6 +2,7 @@
 // never allocates from a lying header, and accepts only images whose layout is consistent.
 // Input layout: height, width, step (uint32 LE each), is_bigendian (1 byte), encoding length n
 // (1 byte), n bytes of encoding, 9 doubles of K for a camera_info, then the image data.
+#include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <string>
@@ -54,6 +55,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   try {
     if (jpcr::decode_curvature_image(image, limits).size() != pixels) __builtin_trap();
+  } catch (const jpcr::InputError&) {
+  }
+  try {
+    const jpcr::Image<float> sd = jpcr::decode_curvature_sd_image(image, limits);
+    if (sd.size() != pixels) __builtin_trap();
+    for (const float s : sd)
+      if (!(std::isnan(s) || (s >= 0.0f && std::isfinite(s)))) __builtin_trap();  // NaN or an sd
   } catch (const jpcr::InputError&) {
   }
   try {

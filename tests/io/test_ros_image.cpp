@@ -186,6 +186,33 @@ TEST(RosImage, CurvatureAndColourRoundTripBitExact) {
   EXPECT_EQ(std::memcmp(cb.data(), c.data(), c.size() * 3), 0);
 }
 
+TEST(RosImage, CurvatureSdRoundTripsBitExactAndRefusesWhatIsNoSd) {
+  Image<float> sd(5, 3, 0.0f);
+  for (std::size_t i = 0; i < sd.size(); ++i)
+    sd[i] = 0.125f * static_cast<float>(i) + 1e-7f;
+  sd[4] = std::numeric_limits<float>::quiet_NaN();  // withheld
+  const RosImageBuffer bytes = encode_curvature_sd_image(sd);
+  EXPECT_EQ(bytes.encoding, "32FC1");
+  EXPECT_EQ(bytes.step, 5u * 4u);
+  const Image<float> back = decode_curvature_sd_image(bytes.view(), {});
+  ASSERT_EQ(back.width(), 5);
+  ASSERT_EQ(back.height(), 3);
+  EXPECT_EQ(std::memcmp(back.data(), sd.data(), sd.size() * sizeof(float)), 0);
+
+  for (const float bad : {-0.5f, std::numeric_limits<float>::infinity()}) {
+    Image<float> wrong = sd;
+    wrong(3, 2) = bad;
+    const RosImageBuffer b = encode_curvature_sd_image(wrong);
+    EXPECT_EQ(input_error_of([&] { decode_curvature_sd_image(b.view(), {}); }),
+              "curvature sd at pixel (3, 2) is " + std::string(bad < 0 ? "-0.5" : "inf") +
+                  ": an sd is a finite value >= 0, or NaN for none");
+  }
+  // A 32FC2 curvature map is not an sd map.
+  const RosImageBuffer k = encode_curvature_image(Image<Eigen::Vector2f>(5, 3));
+  EXPECT_NE(input_error_of([&] { decode_curvature_sd_image(k.view(), {}); }).find("32FC2"),
+            std::string::npos);
+}
+
 TEST(RosImage, MalformedImagesAreRejected) {
   const RosImageBuffer good = encode_depth_image(ramp_depth(8, 4), DepthEncoding::kMillimetres16);
   auto error = [&](auto&& mutate) {
@@ -425,6 +452,10 @@ TEST(DdsConfig, YamlSectionMapsOntoTheStruct) {
   EXPECT_EQ(input_error_of([] { parse_params("dds:\n  domain_id: 300\n", "p.yaml"); }),
             "p.yaml:2: key 'dds.domain_id': must be in 0..232");
   EXPECT_EQ(parse_params("dds:\n  keyframe_queue: 3\n", "p.yaml").dds.keyframe_queue, 3);
+  EXPECT_TRUE(parse_params("", "e.yaml").dds.curvature_sd);
+  EXPECT_FALSE(parse_params("dds:\n  curvature_sd: false\n", "p.yaml").dds.curvature_sd);
+  EXPECT_NE(input_error_of([] { parse_params("dds:\n  curvature_sd: maybe\n", "p.yaml"); }),
+            "<no error>");
   EXPECT_EQ(input_error_of([] { parse_params("dds:\n  keyframe_queue: 0\n", "p.yaml"); }),
             "p.yaml:2: key 'dds.keyframe_queue': must be in 1..1000");
   EXPECT_EQ(input_error_of([] {

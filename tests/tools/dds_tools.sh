@@ -105,7 +105,7 @@ expect 2 "domain must be in 0..232" -- "$echo_bin" rt/x --domain 300
 expect 2 "TOPIC: '/jpcr/odom' is a ROS name; its DDS topic is 'rt/jpcr/odom'" -- "$echo_bin" /jpcr/odom
 expect 2 "TOPIC: 'rt/jpcr/od-om' holds a character other than" -- "$echo_bin" rt/jpcr/od-om
 expect 2 "TOPIC needs a non-empty value" -- "$echo_bin" ""
-expect 2 "type must be odom, pose, path, image, camera_info or keyframe, got 'twist'" -- \
+expect 2 "type must be odom, pose, path, image, camera_info, keyframe or curvature_sd, got 'twist'" -- \
   "$echo_bin" rt/x --type twist
 expect 1 "error: .*nosuch" -- "$play" --dataset "$tmp/nosuch"
 printf 'dds:\n  domain_id: 3\n  topic_prefx: x\n' > "$tmp/bad.yaml"

@@ -2,9 +2,9 @@
 # jpcr_node over real Cyclone DDS on loopback, as separate processes: jpcr_dds_play publishes a
 # 6-frame 160x120 synthetic sequence (32FC1, lossless) as fast as it can, after three malformed
 # depth images from jpcr_test_bad_depth; jpcr_node --method j-ftf rejects those with one log line
-# each, processes the 6 good frames and publishes odom, curvature and path; the final path
+# each, processes the 6 good frames and publishes odom, curvature, its sd and path; the final path
 # received by jpcr_dds_echo equals jpcr_run's offline trajectory to 1e-9 m. jpcr_run --dds
-# publishes the same path. With dds.input_history: keep_all on both sides the player waits for
+# publishes the same path, and the sd maps it writes to curvature_sd/. With dds.input_history: keep_all on both sides the player waits for
 # the node and nothing is dropped. --idle-timeout and SIGTERM stop the node cleanly; bad command lines
 # exit 2 and bad parameters 1. Every wait is bounded.
 set -uo pipefail
@@ -22,10 +22,51 @@ expect 0 "wrote 6 frames" -- "$synth" --scene room_spheres --frames 6 --size 160
 # jpcr_run offline, publishing the same topics (--dds); its path equals its trajectory.txt.
 "$echo_bin" rt/jpcr/path "${dds[@]}" --tum --timeout 120 > "$tmp/run_path.txt" 2>&1 &
 run_echo=$!; pids+=($run_echo)
+"$echo_bin" rt/jpcr/curvature_sd "${dds[@]}" --count 6 --timeout 120 > "$tmp/run_sd.txt" 2>&1 &
+run_sd_echo=$!; pids+=($run_sd_echo)
 sleep 1
 expect 0 "j-ftf " -- "$run" --dataset "$tmp/seq" --method j-ftf --out "$tmp/off" --dds "${dds[@]}"
 kill -INT $run_echo; wait_bounded $run_echo 10
+wait_bounded $run_sd_echo 30 || { echo "FAIL: the curvature_sd echo exited $?"; cat "$tmp/run_sd.txt"; fail=1; }
 same_path "$tmp/run_path.txt" "$tmp/off/trajectory.txt" || { echo "FAIL: jpcr_run --dds path"; cat "$tmp/run_path.txt"; fail=1; }
+# The sd maps published are the ones written: the same share with an sd, median and maximum.
+/usr/bin/python3 - "$tmp/run_sd.txt" "$tmp/off/curvature_sd" <<'PY' || { echo "FAIL: published sd maps differ from curvature_sd/"; cat "$tmp/run_sd.txt"; fail=1; }
+import array, ast, math, os, sys
+def npy(path):  # float32 H x W, little-endian, version 1
+    b = open(path, "rb").read()
+    n = int.from_bytes(b[8:10], "little")
+    head = ast.literal_eval(b[10:10 + n].decode())
+    assert head["descr"] == "<f4" and len(head["shape"]) == 2, head
+    a = array.array("f"); a.frombytes(b[10 + n:])
+    return a
+want = []
+for name in sorted(os.listdir(sys.argv[2])):
+    a = npy(os.path.join(sys.argv[2], name))
+    v = sorted(x for x in a if not math.isnan(x))
+    line = " with_sd=%.1f%%" % (100.0 * len(v) / len(a))
+    if v:
+        line += " median=%.4g max=%.4g 1/m" % (v[len(v) // 2], v[-1])
+    want.append(line)
+got = [l[l.index(" with_sd="):].rstrip("\n") for l in open(sys.argv[1]) if l.startswith("curvature_sd ")]
+if len(want) != 6 or got != want:
+    sys.exit("echo %s\nfiles %s" % (got, want))
+print("ok: 6 published sd maps equal curvature_sd/:", want[0])
+PY
+# dds.curvature_sd: false publishes the maps without their sd (which jpcr_run still writes).
+printf 'dds:\n  history_depth: 32\n  image_history_depth: 16\n  curvature_sd: false\n' > "$tmp/no_sd.yaml"
+no_sd=(--params "$tmp/no_sd.yaml" --domain $domain)
+"$echo_bin" rt/jpcr/curvature "${no_sd[@]}" --count 6 --timeout 120 > "$tmp/no_sd_curv.txt" 2>&1 &
+no_sd_curv=$!; pids+=($no_sd_curv)
+"$echo_bin" rt/jpcr/curvature_sd "${no_sd[@]}" --timeout 120 > "$tmp/no_sd_sd.txt" 2>&1 &
+no_sd_sd=$!; pids+=($no_sd_sd)
+sleep 1
+expect 0 "j-ftf " -- "$run" --dataset "$tmp/seq" --method j-ftf --out "$tmp/off_no_sd" --dds "${no_sd[@]}"
+wait_bounded $no_sd_curv 30 || { echo "FAIL: curvature echo (curvature_sd: false) exited $?"; fail=1; }
+sleep 1; kill -INT $no_sd_sd; wait_bounded $no_sd_sd 10
+n=$(ls "$tmp/off_no_sd/curvature_sd" | wc -l)
+if [ "$n" != 6 ] || grep -q "^curvature_sd " "$tmp/no_sd_sd.txt"; then
+  echo "FAIL: curvature_sd: false: $n sd maps written (want 6), published:"; cat "$tmp/no_sd_sd.txt"; fail=1
+fi
 
 # The round trip: echoes first, then the node, the malformed images, the good frames.
 "$echo_bin" rt/jpcr/path "${dds[@]}" --tum --timeout 240 > "$tmp/path.txt" 2>&1 &
@@ -38,6 +79,8 @@ curv_echo=$!; pids+=($curv_echo)
 color_echo=$!; pids+=($color_echo)
 "$echo_bin" rt/jpcr/keyframe_pose "${dds[@]}" --count 6 --timeout 240 > "$tmp/kf.txt" 2>&1 &
 kf_echo=$!; pids+=($kf_echo)
+"$echo_bin" rt/jpcr/curvature_sd "${dds[@]}" --count 6 --timeout 240 > "$tmp/sd.txt" 2>&1 &
+sd_echo=$!; pids+=($sd_echo)
 sleep 1
 "$node" "${dds[@]}" --method j-ftf --max-frames 6 --idle-timeout 60 > "$tmp/node.txt" 2> "$tmp/node.err" &
 node_pid=$!; pids+=($node_pid)
@@ -53,7 +96,7 @@ fi
 n=$(grep -c "rejected sample" "$tmp/node.err")
 [ "$n" = 3 ] || { echo "FAIL: $n rejection lines, want 3"; cat "$tmp/node.err"; fail=1; }
 grep -q "jpcr_node: frame 6  keyframes 6" "$tmp/node.err" || { echo "FAIL: progress line"; cat "$tmp/node.err"; fail=1; }
-for e in $odom_echo $curv_echo $color_echo $kf_echo; do
+for e in $odom_echo $curv_echo $color_echo $kf_echo $sd_echo; do
   wait_bounded $e 30 || { echo "FAIL: an echo exited $?"; fail=1; }
 done
 kill -INT $path_echo; wait_bounded $path_echo 10
@@ -67,6 +110,8 @@ n=$(grep -c "^image .* 160x120 32FC2 .* valid=" "$tmp/curv.txt")
 [ "$n" = 6 ] || { echo "FAIL: $n of 6 curvature maps"; cat "$tmp/curv.txt"; fail=1; }
 n=$(grep -c "^image .* 160x120 rgb8 .* ok$" "$tmp/color.txt")
 [ "$n" = 6 ] || { echo "FAIL: $n of 6 curvature colour maps"; cat "$tmp/color.txt"; fail=1; }
+n=$(grep -c "^curvature_sd .* 160x120 32FC1 with_sd=[0-9.]*% median=" "$tmp/sd.txt")
+[ "$n" = 6 ] || { echo "FAIL: $n of 6 curvature sd maps"; cat "$tmp/sd.txt"; fail=1; }
 same_path "$tmp/path.txt" "$tmp/off/trajectory.txt" || { echo "FAIL: node path vs offline"; cat "$tmp/path.txt"; fail=1; }
 
 # dds.input_history: keep_all on both sides, at the default input depth of 2 (the first round

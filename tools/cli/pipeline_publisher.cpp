@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "jpcr/io/curvature_colors.hpp"
+#include "jpcr/quadric/curvature_spread.hpp"
 
 namespace jpcr::cli {
 
@@ -31,9 +32,18 @@ void PipelinePublisher::publish_path(const PipelineBackEnd& pipeline) {
 }
 
 void PipelinePublisher::keyframe_final(const PipelineBackEnd& pipeline, int keyframe,
-                                       const QuadricMap& quadrics) {
+                                       const Frame& frame, const QuadricMap& quadrics,
+                                       const Image<float>& sd) {
   const StampedPose& pose = pipeline.keyframe(static_cast<std::size_t>(keyframe)).refined;
-  publisher_.publish_keyframe(pose, quadrics.curvature, render_curvature(quadrics.curvature));
+  Image<float> own_sd;
+  if (publish_sd_ && sd.empty() && spread_ && !quadrics.curvature.empty()) {
+    const VertexMap vertices = compute_vertex_map(frame.depth, frame.camera);
+    own_sd =
+        curvature_spread(quadrics, vertices, spread_->pattern_for(vertices.width()), spread_->fit);
+  }
+  const Image<float>& published = !publish_sd_ ? own_sd : sd.empty() ? own_sd : sd;
+  publisher_.publish_keyframe(pose, quadrics.curvature, render_curvature(quadrics.curvature),
+                              published);
   ++keyframes_published_;
 }
 

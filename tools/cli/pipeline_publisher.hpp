@@ -7,8 +7,9 @@
 //                    for the gauge, 1 m / 1 rad per axis before it); not in the split deployment,
 //                    where the front-end process publishes its own poses
 //   keyframe_pose,   when a keyframe's curvature map is final (the pipeline's CurvatureSink):
-//   curvature,       its refined pose, κ1/κ2 map (32FC2) and render_curvature (rgb8)
-//   curvature_color
+//   curvature,       its refined pose, κ1/κ2 map (32FC2), render_curvature (rgb8) and, unless
+//   curvature_color, dds.curvature_sd is false, the map's sd (32FC1, curvature_spread on the
+//   curvature_sd     keyframe's vertices with the pattern and fit the map was made with)
 //   path             the whole refined trajectory (every frame) after each frame that added a
 //                    keyframe (and so refined), and after finish(). With keep_history = false
 //                    the pipeline forgets each frame once its pose is final: a path then holds
@@ -20,26 +21,38 @@
 
 #include <chrono>
 #include <cstddef>
+#include <optional>
+#include <utility>
 
 #include "jpcr/backend/pipeline_back_end.hpp"
 #include "jpcr/io/dds/dds_result_publisher.hpp"
+#include "jpcr/quadric/quadric_params.hpp"
 
 namespace jpcr::cli {
 
 class PipelinePublisher {
  public:
   /// `keep_history` is the pipeline's (PipelineParams): false makes the paths incremental
-  /// (PathUpdates::kIncremental), kept history_depth deep on the path topic.
-  PipelinePublisher(const DdsParticipant& participant, const DdsConfig& config, bool keep_history)
+  /// (PathUpdates::kIncremental), kept history_depth deep on the path topic. With `spread` (the
+  /// quadric parameters the maps are made with, PipelineParams::joint.quadric), keyframe_final
+  /// computes each map's sd where its caller has none. config.curvature_sd = false: no sd.
+  PipelinePublisher(const DdsParticipant& participant, const DdsConfig& config, bool keep_history,
+                    std::optional<QuadricParams> spread = std::nullopt)
       : path_updates_(keep_history ? PathUpdates::kWhole : PathUpdates::kIncremental),
-        publisher_(participant, config, nullptr, path_updates_) {}
+        publisher_(participant, config, nullptr, path_updates_),
+        publish_sd_(config.curvature_sd),
+        spread_(std::move(spread)) {}
 
   /// Before the first frame: with keep_history = false, takes the frames `pipeline` makes final
   /// (its FrameSink) for the next path. `pipeline` keeps history as the constructor was told.
   void attach(PipelineBackEnd& pipeline);
 
-  /// The CurvatureSink body; `pipeline` is the one calling it.
-  void keyframe_final(const PipelineBackEnd& pipeline, int keyframe, const QuadricMap& quadrics);
+  /// The CurvatureSink body; `pipeline` is the one calling it, `frame` the keyframe `quadrics`
+  /// were fitted on. Publishes `sd` when it is not empty (a map the caller computed already, as
+  /// jpcr_run's CurvatureWriter does), else the map's curvature_spread when constructed with
+  /// `spread`, else no sd; none with dds.curvature_sd false.
+  void keyframe_final(const PipelineBackEnd& pipeline, int keyframe, const Frame& frame,
+                      const QuadricMap& quadrics, const Image<float>& sd = {});
   /// After each KeyframePipeline::add(): odom, and the path when the frame added a keyframe.
   void frame_added(const PipelineBackEnd& pipeline, const PipelineFrame& frame);
   /// The path, when keyframes were added since the last one published.
@@ -59,6 +72,8 @@ class PipelinePublisher {
 
   PathUpdates path_updates_;
   DdsResultPublisher publisher_;
+  bool publish_sd_;
+  std::optional<QuadricParams> spread_;
   Trajectory final_since_path_;   // keep_history = false: final frames not yet in a path
   std::size_t final_frames_ = 0;  // ... and frames [0, final_frames_) have gone to the sink
   std::size_t keyframes_seen_ = 0;

@@ -25,8 +25,8 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-const std::vector<std::string> kTypes = {"odom",  "pose",        "path",
-                                         "image", "camera_info", "keyframe"};
+const std::vector<std::string> kTypes = {"odom",        "pose",     "path",        "image",
+                                         "camera_info", "keyframe", "curvature_sd"};
 
 bool ends_with(const std::string& s, const std::string& suffix) {
   return s.size() >= suffix.size() &&
@@ -34,8 +34,9 @@ bool ends_with(const std::string& s, const std::string& suffix) {
 }
 
 // The type a topic name suggests: .../odom, .../keyframe_pose, .../path, .../camera_info,
-// .../keyframe; anything else is an image.
+// .../keyframe, .../curvature_sd (an image of sd values); anything else is an image.
 std::string type_of_topic(const std::string& topic) {
+  if (ends_with(topic, "curvature_sd")) return "curvature_sd";
   if (ends_with(topic, "odom")) return "odom";
   if (ends_with(topic, "pose")) return "pose";
   if (ends_with(topic, "path")) return "path";
@@ -47,9 +48,10 @@ std::string type_of_topic(const std::string& topic) {
 struct EchoOptions {
   std::string topic;
   DdsQos qos;
-  int count = 0;         // 0: until timeout or signal
-  double timeout = 0.0;  // s, 0: none
-  bool tum = false;      // paths: also every pose as TUM lines at full precision
+  int count = 0;              // 0: until timeout or signal
+  double timeout = 0.0;       // s, 0: none
+  bool tum = false;           // paths: also every pose as TUM lines at full precision
+  bool curvature_sd = false;  // images: summarised as curvature sd maps
 };
 
 template <typename Msg>
@@ -66,7 +68,10 @@ int echo(const DdsParticipant& participant, const EchoOptions& o) {
     reader.take([&](const Msg& m) {
       if (o.count != 0 && received >= o.count) return;
       ++received;
-      std::cout << summarize(m) << std::endl;
+      if constexpr (std::is_same_v<Msg, RosImage>)
+        std::cout << (o.curvature_sd ? summarize_curvature_sd(m) : summarize(m)) << std::endl;
+      else
+        std::cout << summarize(m) << std::endl;
       if constexpr (std::is_same_v<Msg, RosPath>) {
         if (o.tum) {
           try {  // another publisher's path may hold a pose that is none: said, not fatal
@@ -110,8 +115,8 @@ int run(int argc, char** argv) {
                       "$CYCLONEDDS_URI.");
   args.positional("TOPIC", "DDS topic name, e.g. rt/jpcr/odom or rt/camera/depth/image_raw")
       .option("type",
-              "odom | pose | path | image | camera_info | keyframe (default: from the topic "
-              "name; image otherwise)")
+              "odom | pose | path | image | camera_info | keyframe | curvature_sd (default: from "
+              "the topic name; image otherwise)")
       .option("count", "exit after N samples (0: run until --timeout or Ctrl-C)", "0")
       .option("timeout",
               "seconds to listen, up to 86400 (0: no limit); fewer than --count samples is an "
@@ -138,12 +143,14 @@ int run(int argc, char** argv) {
     const std::string type = args.has("type") ? args.get("type") : type_of_topic(o.topic);
     if (std::find(kTypes.begin(), kTypes.end(), type) == kTypes.end()) {
       throw cli::UsageError(
-          "--type must be odom, pose, path, image, camera_info or keyframe, got '" + type + "'");
+          "--type must be odom, pose, path, image, camera_info, keyframe or curvature_sd, got '" +
+          type + "'");
     }
     o.count = args.get_int("count");
     if (o.count < 0) throw cli::UsageError("--count must be >= 0");
     o.timeout = args.get_double("timeout");
     o.tum = args.get_flag("tum");
+    o.curvature_sd = type == "curvature_sd";
     // A finite bound: "inf" or 1e999 would be a listener that never stops, as 0 says on purpose.
     if (!(o.timeout >= 0.0 && o.timeout <= 86400.0))
       throw cli::UsageError("--timeout must be 0..86400 s (0: no limit)");

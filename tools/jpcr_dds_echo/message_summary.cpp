@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include "jpcr/io/dds/ros_image.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -93,6 +94,26 @@ std::string summarize(const RosImage& m) {
   return header("image", m.header) + " " + std::to_string(m.width) + "x" +
          std::to_string(m.height) + " " + text(m.encoding) + " step=" + std::to_string(m.step) +
          " bytes=" + std::to_string(m.data._length) + image_content(v);
+}
+
+std::string summarize_curvature_sd(const RosImage& m) {
+  const RosImageView v = image_view_of(m);
+  std::string s = header("curvature_sd", m.header) + " " + std::to_string(m.width) + "x" +
+                  std::to_string(m.height) + " " + text(m.encoding);
+  try {
+    const Image<float> sd = decode_curvature_sd_image(v, {});
+    std::vector<float> values;
+    for (const float x : sd)
+      if (!std::isnan(x)) values.push_back(x);
+    s += format(" with_sd=%.1f%%", sd.empty() ? 0.0 : 100.0 * values.size() / sd.size());
+    if (values.empty()) return s;
+    const auto middle = values.begin() + values.size() / 2;
+    std::nth_element(values.begin(), middle, values.end());
+    return s + format(" median=%.4g max=%.4g 1/m", *middle,
+                      *std::max_element(values.begin(), values.end()));
+  } catch (const InputError& e) {
+    return s + " invalid: " + e.what();
+  }
 }
 
 // The intrinsics jpcr reads (decode_camera_info): P's, the rectified camera's, or K's when P is

@@ -1,11 +1,11 @@
 // jpcr_node: the live system over DDS. Subscribes a ROS 2 depth camera (sensor_msgs/Image 16UC1
 // or 32FC1 + sensor_msgs/CameraInfo, the dds: section's topics), runs every received frame
-// through the keyframe pipeline and publishes odom, keyframe_pose, curvature, curvature_color and
-// path (cli/pipeline_publisher.hpp). --role splits the pipeline over two processes joined by the
+// through the keyframe pipeline and publishes odom, keyframe_pose, curvature, curvature_color,
+// curvature_sd and path (cli/pipeline_publisher.hpp). --role splits the pipeline over two processes joined by the
 // keyframe topic (io/dds/dds_keyframe_link.hpp):
 //   all       (default) front end and back end in this process (KeyframePipeline)
 //   frontend  PipelineFrontEnd: depth in, odom (front-end poses) and keyframes out
-//   backend   PipelineBackEnd: keyframes in, keyframe_pose, curvature, curvature_color, path out
+//   backend   PipelineBackEnd: keyframes in, keyframe_pose, curvature(_color, _sd), path out
 // Stops cleanly on SIGINT/SIGTERM, after --max-frames frames, when no input arrived for
 // --idle-timeout seconds after the first, or (back end) at the front end's end of stream:
 // finishes, publishes what is left, waits for the readers' acknowledgements and exits 0.
@@ -48,12 +48,13 @@ std::chrono::milliseconds milliseconds_of(double seconds) {
 // Front end and back end in one process.
 int run_all(const NodeOptions& o, const DdsParticipant& participant) {
   DdsDepthSubscriber subscriber(participant, o.dds);
-  cli::PipelinePublisher publisher(participant, o.dds, o.pipeline.keep_history);
+  cli::PipelinePublisher publisher(participant, o.dds, o.pipeline.keep_history,
+                                   o.pipeline.joint.quadric);
   std::optional<KeyframePipeline> runner;
   runner.emplace(
       o.pipeline,
-      [&](int keyframe, const Frame&, const QuadricMap& quadrics) {
-        publisher.keyframe_final(*runner, keyframe, quadrics);
+      [&](int keyframe, const Frame& frame, const QuadricMap& quadrics) {
+        publisher.keyframe_final(*runner, keyframe, frame, quadrics);
       },
       device_refiner_factory(o.device, std::cerr));
   publisher.attach(*runner);
@@ -241,12 +242,13 @@ int run_frontend(const NodeOptions& o, const DdsParticipant& participant) {
 // The back-end process: keyframes in, J-ftf / J-full, re-anchoring, results out.
 int run_backend(const NodeOptions& o, const DdsParticipant& participant) {
   DdsKeyframeReader reader(participant, o.dds);
-  cli::PipelinePublisher publisher(participant, o.dds, o.pipeline.keep_history);
+  cli::PipelinePublisher publisher(participant, o.dds, o.pipeline.keep_history,
+                                   o.pipeline.joint.quadric);
   std::optional<PipelineBackEnd> back_end;
   back_end.emplace(
       o.pipeline,
-      [&](int keyframe, const Frame&, const QuadricMap& quadrics) {
-        publisher.keyframe_final(*back_end, keyframe, quadrics);
+      [&](int keyframe, const Frame& frame, const QuadricMap& quadrics) {
+        publisher.keyframe_final(*back_end, keyframe, frame, quadrics);
       },
       device_refiner_factory(o.device, std::cerr));
   publisher.attach(*back_end);
@@ -341,7 +343,8 @@ int node_main(int argc, char** argv) {
       "refined-so-far pose with the front end's covariance of it, accumulated along its\n"
       "alignments in map axes, zero for the gauge, the first frame with points, and\n"
       "1 m / 1 rad per axis for any frame before it),\n"
-      "keyframe_pose + curvature (32FC2) + curvature_color (rgb8) when a keyframe's map is\n"
+      "keyframe_pose + curvature (32FC2) + curvature_color (rgb8) + curvature_sd (32FC1, the\n"
+      "map's sd per pixel; not with dds.curvature_sd: false) when a keyframe's map is\n"
       "final, and path (the refined poses, transient local) after every keyframe and at the\n"
       "end. For unattended runs set pipeline.keep_history: false in --params: each frame is\n"
       "forgotten once its pose is final and published, so memory stays bounded, and each path\n"
@@ -355,7 +358,8 @@ int node_main(int argc, char** argv) {
       "--role frontend / backend split the pipeline over two processes (two hosts) joined by\n"
       "PREFIX keyframe: the front end publishes odom (its own poses) and sends each keyframe\n"
       "(depth, camera, pose, the poses of the frames since the previous keyframe); the back\n"
-      "end refines and publishes keyframe_pose, curvature, curvature_color and path, the same\n"
+      "end refines and publishes keyframe_pose, curvature, curvature_color, curvature_sd and\n"
+      "path, the same\n"
       "trajectory as --role all. Start the back end first; give both the same --params,\n"
       "--method and --window. A back end dds.keyframe_queue keyframes behind makes the front\n"
       "end wait for it; at the end the front end waits for the back end to finish.\n"

@@ -79,11 +79,14 @@ int run_main(int argc, char** argv) {
                 "output directory (created; the outputs of an earlier run there are replaced, "
                 "other files are left alone; nothing is written when the run fails)")
       .flag("ply", "also write a PLY point cloud per keyframe")
-      .flag("no-sd", "write no curvature_sd/ maps (each takes about as long as a Quad IT fit)");
+      .flag("no-sd",
+            "write no curvature_sd/ maps and, with --dds, publish none (each takes about as long "
+            "as a Quad IT fit)");
   cli::add_device_option(args);
 #ifdef JPCR_HAVE_DDS
   args.flag("dds",
-            "also publish odom, keyframe_pose, curvature, curvature_color and path over DDS"
+            "also publish odom, keyframe_pose, curvature, curvature_color, curvature_sd and path"
+            " over DDS"
             " (as jpcr_node does; --params' dds: section, --domain, --cyclone-uri)");
   args.option("domain", "DDS domain id 0..232 with --dds (overrides dds.domain_id)")
       .option("cyclone-uri", "Cyclone DDS configuration with --dds, file://PATH or XML");
@@ -164,17 +167,18 @@ int run_main(int argc, char** argv) {
     KeyframePipeline runner(
         pipeline,
         [&](int k, const Frame& frame, const QuadricMap& quadrics) {
+          // The vertex map (of the depth the map was fitted on) is needed for the sd and the PLY;
+          // compute_vertex_map is cheap next to J-ftf.
+          Image<float> sd;              // the one written, published too (--dds)
+          out.write<OutputError>([&] {  // e.g. a full disk: named by OUT, not by the dataset
+            sd = writer.write(format_stamp(frame.timestamp), quadrics,
+                              compute_vertex_map(frame.depth, frame.camera));
+          });
 #ifdef JPCR_HAVE_DDS
-          if (dds) dds->keyframe_final(*self, k, quadrics);
+          if (dds) dds->keyframe_final(*self, k, frame, quadrics, sd);
 #endif
           (void)k;
           (void)self;
-          // The vertex map (of the depth the map was fitted on) is needed for the sd and the PLY;
-          // compute_vertex_map is cheap next to J-ftf.
-          out.write<OutputError>([&] {  // e.g. a full disk: named by OUT, not by the dataset
-            writer.write(format_stamp(frame.timestamp), quadrics,
-                         compute_vertex_map(frame.depth, frame.camera));
-          });
         },
         refiners);
     self = &runner;
