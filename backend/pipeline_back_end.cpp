@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <exception>
+#include <new>
 #include <stdexcept>
+#include <string>
 
 #include "jpcr/frontend/frame_pyramid.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -53,6 +55,13 @@ RefinementResult refine_or_report(const Refiner& refiner, const std::vector<Fram
   RefinementResult r;
   try {
     r = refiner.refine(frames, initial);
+  } catch (const std::bad_alloc&) {  // what() says only "std::bad_alloc"
+    const std::string size = frames.empty() ? std::string("no")
+                                            : std::to_string(frames.front().depth.width()) + "x" +
+                                                  std::to_string(frames.front().depth.height());
+    return failed(refiner, "out of memory: " + refiner.name() + " of " +
+                               std::to_string(frames.size()) + " frames of " + size +
+                               " needs more memory than is free");
   } catch (const std::exception& e) {
     return failed(refiner, e.what());
   } catch (...) {

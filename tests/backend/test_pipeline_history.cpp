@@ -107,6 +107,7 @@ class FailingRefiner : public WrappingRefiner {
   enum class How {
     kVerdict,
     kThrow,
+    kOutOfMemory,
     kThrowOther,
     kTooFewPoses,
     kNanPose,
@@ -122,6 +123,7 @@ class FailingRefiner : public WrappingRefiner {
     if (std::find(fails_.begin(), fails_.end(), calls_++) == fails_.end())
       return WrappingRefiner::refine(frames, initial);
     if (how_ == How::kThrow) throw std::runtime_error("device lost");
+    if (how_ == How::kOutOfMemory) throw std::bad_alloc();
     if (how_ == How::kThrowOther) throw 42;
     if (how_ == How::kPoseVerdictsBeyondThePoses) {  // the last pose missing, its verdict not
       RefinementResult r = WrappingRefiner::refine(frames, initial);
@@ -429,15 +431,19 @@ TEST(PipelineHistory, ARefinerThatThrowsIsAFailedRefinementAndTheRunGoesOn) {
 }
 
 // A library caller's refiner that says "converged" of poses the pipeline cannot use (one too
-// few: read past the end; one not finite) or throws what is no std::exception is a failed
-// refinement that says why, as one that throws: the keyframe keeps the front end's motion.
+// few: read past the end; one not finite) or throws what is no std::exception, and one out of
+// memory, is a failed refinement that says why, as one that throws: the keyframe keeps the front
+// end's motion.
 TEST(PipelineHistory, ARefinerWhosePosesCannotBeUsedIsAFailedRefinement) {
   using How = FailingRefiner::How;
   for (const auto& [how, why] :
        {std::pair{How::kTooFewPoses, "the refiner gave 1 poses for 2 frames"},
         std::pair{How::kNanPose, "the refiner's pose 1 is no rigid motion"},
         std::pair{How::kTooManyPoseVerdicts, "the refiner gave 2 pose verdicts for 1 poses"},
-        std::pair{How::kThrowOther, "an exception that is no std::exception"}}) {
+        std::pair{How::kThrowOther, "an exception that is no std::exception"},
+        // std::bad_alloc's what() says only that; the error says what ran out and on what.
+        std::pair{How::kOutOfMemory,
+                  "out of memory: j-ftf of 2 frames of 0x0 needs more memory"}}) {
     PipelineParams p;
     p.method = PipelineMethod::kJointFtf;
     PipelineBackEnd back_end(p, CurvatureSink{}, failing({1}, {}, how));
