@@ -351,7 +351,9 @@ TEST(CudaJointFrameToFrame, RefinesAPairToConvergenceAsTheCpu) {
   EXPECT_NEAR(gpu_kept.report.quad_it_fits_restored, restored, 0.02 * restored + 2)
       << "seed " << seed;
   EXPECT_NEAR(restored, cpu_restored, 0.02 * cpu_restored + 2) << "seed " << seed;
-  if (restored > 10) EXPECT_GT(gpu_kept.report.quad_it_fits_restored, 0) << "seed " << seed;
+  if (restored > 10) {
+    EXPECT_GT(gpu_kept.report.quad_it_fits_restored, 0) << "seed " << seed;
+  }
 }
 
 TEST(CudaJointFrameToFrame, ReusesDeviceBuffersAcrossPairs) {
