@@ -55,12 +55,15 @@ RefinementResult refine_or_report(const Refiner& refiner, const std::vector<Fram
   RefinementResult r;
   try {
     r = refiner.refine(frames, initial);
+  } catch (const std::bad_array_new_length& e) {  // a bad size, not a lack of memory
+    return failed(refiner, e.what());
   } catch (const std::bad_alloc&) {  // what() says only "std::bad_alloc"
-    const std::string size = frames.empty() ? std::string("no")
-                                            : std::to_string(frames.front().depth.width()) + "x" +
-                                                  std::to_string(frames.front().depth.height());
+    const std::string size = frames.empty()
+                                 ? std::string()
+                                 : " of " + std::to_string(frames.front().depth.width()) + "x" +
+                                       std::to_string(frames.front().depth.height());
     return failed(refiner, "out of memory: " + refiner.name() + " of " +
-                               std::to_string(frames.size()) + " frames of " + size +
+                               std::to_string(frames.size()) + " frames" + size +
                                " needs more memory than is free");
   } catch (const std::exception& e) {
     return failed(refiner, e.what());

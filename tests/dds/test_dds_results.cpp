@@ -216,7 +216,7 @@ TEST_F(DdsResults, CurvatureSdArrivesBitExactWithTheMapsStamp) {
   Image<float> sd(320, 240, 0.0f);
   for (std::size_t i = 0; i < sd.size(); ++i)
     sd[i] = i % 13 == 0 ? std::numeric_limits<float>::quiet_NaN() : uniform(rng);
-  // An sd map the size of another map is a caller's mistake, named before anything is sent.
+  // An sd map the size of another map is a caller's mistake, refused before anything is written.
   EXPECT_THROW(publisher_.publish_keyframe(some_pose(5.0), k, {}, Image<float>(32, 24, 1.0f)),
                std::invalid_argument);
   publisher_.publish_keyframe(some_pose(5.5), k, {}, sd);

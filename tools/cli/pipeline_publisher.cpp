@@ -36,12 +36,15 @@ void PipelinePublisher::keyframe_final(const PipelineBackEnd& pipeline, int keyf
                                        const Image<float>& sd) {
   const StampedPose& pose = pipeline.keyframe(static_cast<std::size_t>(keyframe)).refined;
   Image<float> own_sd;
-  if (publish_sd_ && sd.empty() && spread_ && !quadrics.curvature.empty()) {
+  // Computed only for a reader (about one Quad IT fit): the topic is volatile, so a reader that
+  // matches later would not receive this map anyway.
+  if (publish_sd_ && sd.empty() && spread_ && !quadrics.curvature.empty() &&
+      publisher_.matched(ResultTopic::kCurvatureSd) > 0) {
     const VertexMap vertices = compute_vertex_map(frame.depth, frame.camera);
     own_sd =
         curvature_spread(quadrics, vertices, spread_->pattern_for(vertices.width()), spread_->fit);
   }
-  const Image<float>& published = !publish_sd_ ? own_sd : sd.empty() ? own_sd : sd;
+  const Image<float>& published = !publish_sd_ || sd.empty() ? own_sd : sd;
   publisher_.publish_keyframe(pose, quadrics.curvature, render_curvature(quadrics.curvature),
                               published);
   ++keyframes_published_;

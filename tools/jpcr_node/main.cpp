@@ -1,8 +1,8 @@
 // jpcr_node: the live system over DDS. Subscribes a ROS 2 depth camera (sensor_msgs/Image 16UC1
 // or 32FC1 + sensor_msgs/CameraInfo, the dds: section's topics), runs every received frame
 // through the keyframe pipeline and publishes odom, keyframe_pose, curvature, curvature_color,
-// curvature_sd and path (cli/pipeline_publisher.hpp). --role splits the pipeline over two processes joined by the
-// keyframe topic (io/dds/dds_keyframe_link.hpp):
+// curvature_sd and path (cli/pipeline_publisher.hpp). --role splits the pipeline over two
+// processes joined by the keyframe topic (io/dds/dds_keyframe_link.hpp):
 //   all       (default) front end and back end in this process (KeyframePipeline)
 //   frontend  PipelineFrontEnd: depth in, odom (front-end poses) and keyframes out
 //   backend   PipelineBackEnd: keyframes in, keyframe_pose, curvature(_color, _sd), path out
@@ -359,10 +359,9 @@ int node_main(int argc, char** argv) {
       "PREFIX keyframe: the front end publishes odom (its own poses) and sends each keyframe\n"
       "(depth, camera, pose, the poses of the frames since the previous keyframe); the back\n"
       "end refines and publishes keyframe_pose, curvature, curvature_color, curvature_sd and\n"
-      "path, the same\n"
-      "trajectory as --role all. Start the back end first; give both the same --params,\n"
-      "--method and --window. A back end dds.keyframe_queue keyframes behind makes the front\n"
-      "end wait for it; at the end the front end waits for the back end to finish.\n"
+      "path, the same trajectory as --role all. Start the back end first; give both the same\n"
+      "--params, --method and --window. A back end dds.keyframe_queue keyframes behind makes\n"
+      "the front end wait for it; at the end the front end waits for the back end to finish.\n"
       "Stops on SIGINT/SIGTERM, --max-frames, --idle-timeout or (back end) the front end's\n"
       "end of stream: finishes the pipeline, publishes the final path, flushes and exits 0.");
   args.option("role", "all | frontend | backend", "all")

@@ -245,9 +245,10 @@ std::string untrusted_warning(const KeyframePipeline& p) {
   // send the user there for "out of memory".
   for (std::size_t k = 0; k < p.keyframe_count(); ++k) {
     const PipelineKeyframe& key = p.keyframe(k);
-    for (const std::optional<RefinementReport>& r : {key.pair, key.window})
-      if (r && r->verdict == RefinementVerdict::kError && !r->error.empty()) {
-        line << "; the first error, " << r->method << " at keyframe " << k << ": " << r->error;
+    for (const std::optional<RefinementReport>* r : {&key.pair, &key.window})
+      if (*r && (*r)->verdict == RefinementVerdict::kError && !(*r)->error.empty()) {
+        line << "; the first error, " << (*r)->method << " at keyframe " << k << ": "
+             << (*r)->error;
         return line.str();
       }
   }
