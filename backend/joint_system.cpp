@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -10,6 +11,7 @@
 
 #include "jpcr/backend/gathered_frame_terms.hpp"
 #include "jpcr/backend/joint_params.hpp"
+#include "jpcr/quadric/parallel_guard.hpp"
 
 namespace jpcr {
 
@@ -117,18 +119,26 @@ double step_factors(const PairFactors& f, const JointState& state,
 }
 
 // The sums per frame: gathered and vectorised across samples (the default), or sample by sample
-// as the GPU runs them (the reference, for tests). Each thread owns one sampler.
+// as the GPU runs them (the reference, for tests). Each thread of a parallel region owns one
+// sampler, built under `guard` (its buffers may fail to allocate): then `body` gets a null one,
+// and must still reach its `omp for`, as every thread of the team must.
+template <typename Sampler>
+Sampler* guarded_sampler(std::optional<Sampler>& sampler, int pattern_size, ParallelGuard& guard) {
+  guard.run([&] { sampler.emplace(pattern_size); });
+  return sampler ? &*sampler : nullptr;
+}
+
 template <typename Body>
-void with_sampler(JointSampling sampling, int pattern_size, Body&& body) {
+void with_sampler(JointSampling sampling, int pattern_size, ParallelGuard& guard, Body&& body) {
   if (sampling == JointSampling::kReference) {
-    DirectSampler<double> sampler;
-    body(sampler);
+    DirectSampler<double> sampler;  // holds no buffers
+    body(&sampler);
   } else if (sampling == JointSampling::kGatheredDouble) {
-    GatheredSampler<double> sampler(pattern_size);
-    body(sampler);
+    std::optional<GatheredSampler<double>> sampler;
+    body(guarded_sampler(sampler, pattern_size, guard));
   } else {
-    GatheredSampler<float> sampler(pattern_size);
-    body(sampler);
+    std::optional<GatheredSampler<float>> sampler;
+    body(guarded_sampler(sampler, pattern_size, guard));
   }
 }
 
@@ -167,36 +177,42 @@ void JointSystem::linearize(const JointState& state, double lambda, ReducedSyste
   out.fixed_active.resize(params_.estimate_quadrics ? 0 : valid);
   std::atomic<std::size_t> factors_end{0}, fixed_end{0};
   ReductionShare total(n, M - 1);
+  ParallelGuard guard;  // e.g. a worker's buffers out of memory: rethrown, not std::terminate
 #pragma omp parallel
   {
-    ReductionShare share(n, M - 1);
-    with_sampler(sampling_, window.pattern_size, [&](auto& sampler) {
+    std::optional<ReductionShare> share;
+    guard.run([&] { share.emplace(n, M - 1); });
+    with_sampler(sampling_, window.pattern_size, guard, [&](auto* sampler) {
 #pragma omp for schedule(dynamic, kRowChunk) nowait
-      for (int v = 0; v < height_; ++v) {
-        if (M == 2)
-          linearize_row<2>(state, window, params_, lambda, v, width_, keep_factors, sampler, share);
-        else
-          linearize_row<kMaxWindowFrames>(state, window, params_, lambda, v, width_, false, sampler,
-                                          share);
-        append_rows(share.factors, out.factors, factors_end);
-        append_rows(share.fixed_active, out.fixed_active, fixed_end);
-      }
+      for (int v = 0; v < height_; ++v)
+        guard.run([&] {
+          if (!sampler || !share) return;
+          if (M == 2)
+            linearize_row<2>(state, window, params_, lambda, v, width_, keep_factors, *sampler,
+                             *share);
+          else
+            linearize_row<kMaxWindowFrames>(state, window, params_, lambda, v, width_, false,
+                                            *sampler, *share);
+          append_rows(share->factors, out.factors, factors_end);
+          append_rows(share->fixed_active, out.fixed_active, fixed_end);
+        });
     });
 #pragma omp critical(jpcr_joint_reduce)
-    {
+    if (share) {
       for (std::size_t k = 0; k < total.S.size(); ++k)
-        total.S[k] += share.S[k];
+        total.S[k] += share->S[k];
       for (int k = 0; k < n; ++k) {
-        total.s[k] += share.s[k];
-        total.A_diagonal[k] += share.A_diagonal[k];
+        total.s[k] += share->s[k];
+        total.A_diagonal[k] += share->A_diagonal[k];
       }
       for (int j = 0; j + 1 < M; ++j)
-        total.seen[j] += share.seen[j];
-      total.cost += share.cost;
-      total.terms += share.terms;
-      total.active += share.active;
+        total.seen[j] += share->seen[j];
+      total.cost += share->cost;
+      total.terms += share->terms;
+      total.active += share->active;
     }
   }
+  guard.rethrow();
   out.factors.resize(factors_end);
   out.fixed_active.resize(fixed_end);
   // total.S is row-major with its lower triangle filled: as a column-major map that is the upper
@@ -233,13 +249,18 @@ void JointSystem::step_pair(const JointState& state, const ReducedSystem& system
                             const JointWindowView<double>& next, JointStep& out) const {
   const long count = static_cast<long>(system.factors.size());
   double cost = 0.0;
+  ParallelGuard guard;
 #pragma omp parallel reduction(+ : cost)
-  with_sampler(sampling_, next.pattern_size, [&](auto& sampler) {
+  with_sampler(sampling_, next.pattern_size, guard, [&](auto* sampler) {
 #pragma omp for schedule(dynamic, 256)
     for (long k = 0; k < count; ++k)
-      cost += step_factors(system.factors[static_cast<std::size_t>(k)], state, window, next,
-                           params_, out.pose_steps[0], width_, sampler, out);
+      guard.run([&] {
+        if (sampler)
+          cost += step_factors(system.factors[static_cast<std::size_t>(k)], state, window, next,
+                               params_, out.pose_steps[0], width_, *sampler, out);
+      });
   });
+  guard.rethrow();
   out.cost = cost;
 }
 
@@ -248,16 +269,20 @@ void JointSystem::step_fixed(const JointState& state, const ReducedSystem& syste
                              const JointWindowView<double>& next, JointStep& out) const {
   const long count = static_cast<long>(system.fixed_active.size());
   double cost = 0.0;
+  ParallelGuard guard;
 #pragma omp parallel reduction(+ : cost)
-  with_sampler(sampling_, next.pattern_size, [&](auto& sampler) {
+  with_sampler(sampling_, next.pattern_size, guard, [&](auto* sampler) {
 #pragma omp for schedule(dynamic, 256)
-    for (long k = 0; k < count; ++k) {
-      const FixedPixel& f = system.fixed_active[static_cast<std::size_t>(k)];
-      const int u = static_cast<int>(f.pixel % width_), v = static_cast<int>(f.pixel / width_);
-      const Quadricd& q = state.quadrics[f.pixel];  // fixed: Q-full
-      cost += linearized_pixel_cost(q, q, window, next, u, v, f.seen, params_, sampler);
-    }
+    for (long k = 0; k < count; ++k)
+      guard.run([&] {
+        if (!sampler) return;
+        const FixedPixel& f = system.fixed_active[static_cast<std::size_t>(k)];
+        const int u = static_cast<int>(f.pixel % width_), v = static_cast<int>(f.pixel / width_);
+        const Quadricd& q = state.quadrics[f.pixel];  // fixed: Q-full
+        cost += linearized_pixel_cost(q, q, window, next, u, v, f.seen, params_, *sampler);
+      });
   });
+  guard.rethrow();
   out.cost = cost;
 }
 
@@ -265,13 +290,18 @@ void JointSystem::step_window(const JointState& state, double lambda,
                               const JointWindowView<double>& window,
                               const JointWindowView<double>& next, JointStep& out) const {
   double cost = 0.0;
+  ParallelGuard guard;
 #pragma omp parallel reduction(+ : cost)
-  with_sampler(sampling_, next.pattern_size, [&](auto& sampler) {
+  with_sampler(sampling_, next.pattern_size, guard, [&](auto* sampler) {
 #pragma omp for schedule(dynamic, kRowChunk)
     for (int v = 0; v < height_; ++v)
-      cost += step_row<kMaxWindowFrames>(state, window, next, params_, lambda,
-                                         out.pose_steps.data(), v, width_, sampler, out);
+      guard.run([&] {
+        if (sampler)
+          cost += step_row<kMaxWindowFrames>(state, window, next, params_, lambda,
+                                             out.pose_steps.data(), v, width_, *sampler, out);
+      });
   });
+  guard.rethrow();
   out.cost = cost;
 }
 
@@ -304,19 +334,23 @@ std::vector<int> reference_inliers(const VertexMap& reference, const Neighbourho
   const int pattern_size = static_cast<int>(pattern.size());
   const VertexView view{reference.data(), width, height};
   std::vector<int> count(state.quadrics.size(), 0);
+  ParallelGuard guard;
 #pragma omp parallel
-  with_sampler(JointSampling::kGathered, pattern_size, [&](auto& sampler) {
+  with_sampler(JointSampling::kGathered, pattern_size, guard, [&](auto* sampler) {
 #pragma omp for schedule(dynamic, kRowChunk)
     for (int v = 0; v < height; ++v)
-      for (int u = 0; u < width; ++u) {
-        const std::size_t i = static_cast<std::size_t>(v) * width + u;
-        if (!state.valid[i]) continue;
-        const Quadricd& q = state.quadrics[i];
-        sampler.cost(q, q, view, RigidMotion<double>{}, RigidMotion<double>{},
-                     pattern.offsets.data(), pattern_size, u, v,
-                     SampleGate<double>::at(params.fit, q.center), count[i]);
-      }
+      guard.run([&] {
+        for (int u = 0; u < width && sampler; ++u) {
+          const std::size_t i = static_cast<std::size_t>(v) * width + u;
+          if (!state.valid[i]) continue;
+          const Quadricd& q = state.quadrics[i];
+          sampler->cost(q, q, view, RigidMotion<double>{}, RigidMotion<double>{},
+                        pattern.offsets.data(), pattern_size, u, v,
+                        SampleGate<double>::at(params.fit, q.center), count[i]);
+        }
+      });
   });
+  guard.rethrow();
   return count;
 }
 

@@ -3,12 +3,14 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Cholesky>
 
 #include "jpcr/quadric/error.hpp"
+#include "jpcr/quadric/parallel_guard.hpp"
 #include "jpcr/quadric/sample_columns.hpp"
 
 namespace jpcr {
@@ -133,16 +135,21 @@ Image<float> curvature_spread(const QuadricMap& map, const VertexMap& vertices,
   check_sizes(map, vertices);
   Image<float> sd(map.width(), map.height(), std::numeric_limits<float>::quiet_NaN());
   const VertexView view{vertices.data(), vertices.width(), vertices.height()};
+  ParallelGuard guard;  // e.g. a worker's buffers out of memory: rethrown, not std::terminate
 #pragma omp parallel
   {
-    SpreadSums sums(pattern.size());
+    std::optional<SpreadSums> sums;
+    guard.run([&] { sums.emplace(pattern.size()); });
 #pragma omp for schedule(dynamic, 4)
     for (int v = 0; v < map.height(); ++v)
-      for (int u = 0; u < map.width(); ++u)
-        if (map.valid(u, v))
-          sd(u, v) = static_cast<float>(
-              spread_at(map.quadrics(u, v).cast<double>(), view, pattern, fit, u, v, sums));
+      guard.run([&] {
+        for (int u = 0; u < map.width() && sums; ++u)
+          if (map.valid(u, v))
+            sd(u, v) = static_cast<float>(
+                spread_at(map.quadrics(u, v).cast<double>(), view, pattern, fit, u, v, *sums));
+      });
   }
+  guard.rethrow();
   return sd;
 }
 

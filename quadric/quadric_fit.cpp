@@ -6,11 +6,13 @@
 #include <cstdint>
 #include <cstdlib>
 #include <limits>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "jpcr/quadric/error.hpp"
+#include "jpcr/quadric/parallel_guard.hpp"
 #include "jpcr/quadric/pixel_lane_steps.hpp"
 #include "jpcr/quadric/pixel_lane_sums.hpp"
 #include "jpcr/quadric/simd_clones.hpp"
@@ -298,14 +300,19 @@ QuadricMap QuadricFit::estimate(const VertexMap& vertices, const NormalMap& norm
     offsets.push_back(static_cast<std::ptrdiff_t>(o.dv) * planes.stride() + o.du);
   QuadricMap map(vertices.width(), vertices.height());
   const int groups = (vertices.width() + kPixelLanes - 1) / kPixelLanes;
+  ParallelGuard guard;  // e.g. a worker's buffers out of memory: rethrown, not std::terminate
 #pragma omp parallel
   {
-    PixelGroupFit fit(vertices, normals, planes, offsets, params_.fit);
+    std::optional<PixelGroupFit> fit;
+    guard.run([&] { fit.emplace(vertices, normals, planes, offsets, params_.fit); });
 #pragma omp for schedule(dynamic, 4)
     for (int v = 0; v < vertices.height(); ++v)
-      for (int g = 0; g < groups; ++g)
-        fit.run(g * kPixelLanes, v, map);
+      guard.run([&] {
+        for (int g = 0; g < groups && fit; ++g)
+          fit->run(g * kPixelLanes, v, map);
+      });
   }
+  guard.rethrow();
   return map;
 }
 

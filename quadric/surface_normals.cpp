@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <vector>
 
 #include "jpcr/quadric/error.hpp"
+#include "jpcr/quadric/parallel_guard.hpp"
 #include "jpcr/quadric/plane_normal_kernel.hpp"
 
 namespace jpcr {
@@ -153,23 +155,28 @@ NormalMap estimate_normals(const VertexMap& vertices, const NormalEstimationPara
   NormalMap normals(vertices.width(), vertices.height(), invalid_vector());
   if (quadrant_tilt) *quadrant_tilt = Image<float>(vertices.width(), vertices.height(), 0.0f);
   const VertexView view{vertices.data(), vertices.width(), vertices.height()};
+  ParallelGuard guard;  // e.g. a worker's buffers out of memory: rethrown, not std::terminate
 #pragma omp parallel
   {
-    CleanWindows windows(vertices, params);
+    std::optional<CleanWindows> windows;
+    guard.run([&] { windows.emplace(vertices, params); });
 #pragma omp for schedule(dynamic, 8)
-    for (int v = 0; v < vertices.height(); ++v) {
-      const bool loaded = windows.load_row(v);
-      for (int u = 0; u < vertices.width(); ++u) {
-        if (!is_sample_point(vertices(u, v))) continue;  // no centre: no normal
-        Eigen::Vector3f& n = normals(u, v);
-        Eigen::Vector3f window;
-        if (!loaded || !windows.normal(u, v, n, window))
-          n = plane_normal(view, u, v, params, &window);
-        if (quadrant_tilt && n.x() == n.x() && window.x() == window.x() && n != window)
-          (*quadrant_tilt)(u, v) = std::acos(std::clamp(n.dot(window), -1.0f, 1.0f));
-      }
-    }
+    for (int v = 0; v < vertices.height(); ++v)
+      guard.run([&] {
+        if (!windows) return;
+        const bool loaded = windows->load_row(v);
+        for (int u = 0; u < vertices.width(); ++u) {
+          if (!is_sample_point(vertices(u, v))) continue;  // no centre: no normal
+          Eigen::Vector3f& n = normals(u, v);
+          Eigen::Vector3f window;
+          if (!loaded || !windows->normal(u, v, n, window))
+            n = plane_normal(view, u, v, params, &window);
+          if (quadrant_tilt && n.x() == n.x() && window.x() == window.x() && n != window)
+            (*quadrant_tilt)(u, v) = std::acos(std::clamp(n.dot(window), -1.0f, 1.0f));
+        }
+      });
   }
+  guard.rethrow();
   return normals;
 }
 
