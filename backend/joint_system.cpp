@@ -184,9 +184,9 @@ void JointSystem::linearize(const JointState& state, double lambda, ReducedSyste
     guard.run([&] { share.emplace(n, M - 1); });
     with_sampler(sampling_, window.pattern_size, guard, [&](auto* sampler) {
 #pragma omp for schedule(dynamic, kRowChunk) nowait
-      for (int v = 0; v < height_; ++v)
-        guard.run([&] {
-          if (!sampler || !share) return;
+      for (int v = 0; v < height_; ++v) {
+        if (guard.failed() || !sampler || !share) continue;
+        try {  // not guard.run's lambda: clang cannot nest it here (parallel_guard.hpp)
           if (M == 2)
             linearize_row<2>(state, window, params_, lambda, v, width_, keep_factors, *sampler,
                              *share);
@@ -195,7 +195,10 @@ void JointSystem::linearize(const JointState& state, double lambda, ReducedSyste
                                             *sampler, *share);
           append_rows(share->factors, out.factors, factors_end);
           append_rows(share->fixed_active, out.fixed_active, fixed_end);
-        });
+        } catch (...) {
+          guard.record_current();
+        }
+      }
     });
 #pragma omp critical(jpcr_joint_reduce)
     if (share) {
@@ -249,16 +252,19 @@ void JointSystem::step_pair(const JointState& state, const ReducedSystem& system
                             const JointWindowView<double>& next, JointStep& out) const {
   const long count = static_cast<long>(system.factors.size());
   double cost = 0.0;
-  ParallelGuard guard;
+  ParallelGuard guard;  // e.g. a worker's buffers out of memory: rethrown, not std::terminate
 #pragma omp parallel reduction(+ : cost)
   with_sampler(sampling_, next.pattern_size, guard, [&](auto* sampler) {
 #pragma omp for schedule(dynamic, 256)
-    for (long k = 0; k < count; ++k)
-      guard.run([&] {
-        if (sampler)
-          cost += step_factors(system.factors[static_cast<std::size_t>(k)], state, window, next,
-                               params_, out.pose_steps[0], width_, *sampler, out);
-      });
+    for (long k = 0; k < count; ++k) {
+      if (guard.failed() || !sampler) continue;
+      try {
+        cost += step_factors(system.factors[static_cast<std::size_t>(k)], state, window, next,
+                             params_, out.pose_steps[0], width_, *sampler, out);
+      } catch (...) {
+        guard.record_current();
+      }
+    }
   });
   guard.rethrow();
   out.cost = cost;
@@ -269,18 +275,21 @@ void JointSystem::step_fixed(const JointState& state, const ReducedSystem& syste
                              const JointWindowView<double>& next, JointStep& out) const {
   const long count = static_cast<long>(system.fixed_active.size());
   double cost = 0.0;
-  ParallelGuard guard;
+  ParallelGuard guard;  // e.g. a worker's buffers out of memory: rethrown, not std::terminate
 #pragma omp parallel reduction(+ : cost)
   with_sampler(sampling_, next.pattern_size, guard, [&](auto* sampler) {
 #pragma omp for schedule(dynamic, 256)
-    for (long k = 0; k < count; ++k)
-      guard.run([&] {
-        if (!sampler) return;
+    for (long k = 0; k < count; ++k) {
+      if (guard.failed() || !sampler) continue;
+      try {
         const FixedPixel& f = system.fixed_active[static_cast<std::size_t>(k)];
         const int u = static_cast<int>(f.pixel % width_), v = static_cast<int>(f.pixel / width_);
         const Quadricd& q = state.quadrics[f.pixel];  // fixed: Q-full
         cost += linearized_pixel_cost(q, q, window, next, u, v, f.seen, params_, *sampler);
-      });
+      } catch (...) {
+        guard.record_current();
+      }
+    }
   });
   guard.rethrow();
   out.cost = cost;
@@ -290,16 +299,19 @@ void JointSystem::step_window(const JointState& state, double lambda,
                               const JointWindowView<double>& window,
                               const JointWindowView<double>& next, JointStep& out) const {
   double cost = 0.0;
-  ParallelGuard guard;
+  ParallelGuard guard;  // e.g. a worker's buffers out of memory: rethrown, not std::terminate
 #pragma omp parallel reduction(+ : cost)
   with_sampler(sampling_, next.pattern_size, guard, [&](auto* sampler) {
 #pragma omp for schedule(dynamic, kRowChunk)
-    for (int v = 0; v < height_; ++v)
-      guard.run([&] {
-        if (sampler)
-          cost += step_row<kMaxWindowFrames>(state, window, next, params_, lambda,
-                                             out.pose_steps.data(), v, width_, *sampler, out);
-      });
+    for (int v = 0; v < height_; ++v) {
+      if (guard.failed() || !sampler) continue;
+      try {
+        cost += step_row<kMaxWindowFrames>(state, window, next, params_, lambda,
+                                           out.pose_steps.data(), v, width_, *sampler, out);
+      } catch (...) {
+        guard.record_current();
+      }
+    }
   });
   guard.rethrow();
   out.cost = cost;
@@ -334,13 +346,14 @@ std::vector<int> reference_inliers(const VertexMap& reference, const Neighbourho
   const int pattern_size = static_cast<int>(pattern.size());
   const VertexView view{reference.data(), width, height};
   std::vector<int> count(state.quadrics.size(), 0);
-  ParallelGuard guard;
+  ParallelGuard guard;  // e.g. a worker's buffers out of memory: rethrown, not std::terminate
 #pragma omp parallel
   with_sampler(JointSampling::kGathered, pattern_size, guard, [&](auto* sampler) {
 #pragma omp for schedule(dynamic, kRowChunk)
-    for (int v = 0; v < height; ++v)
-      guard.run([&] {
-        for (int u = 0; u < width && sampler; ++u) {
+    for (int v = 0; v < height; ++v) {
+      if (guard.failed() || !sampler) continue;
+      try {
+        for (int u = 0; u < width; ++u) {
           const std::size_t i = static_cast<std::size_t>(v) * width + u;
           if (!state.valid[i]) continue;
           const Quadricd& q = state.quadrics[i];
@@ -348,7 +361,10 @@ std::vector<int> reference_inliers(const VertexMap& reference, const Neighbourho
                         pattern.offsets.data(), pattern_size, u, v,
                         SampleGate<double>::at(params.fit, q.center), count[i]);
         }
-      });
+      } catch (...) {
+        guard.record_current();
+      }
+    }
   });
   guard.rethrow();
   return count;

@@ -15,13 +15,13 @@
 //   }
 //   guard.rethrow();
 //
-// Once one piece has failed, the others return at once (the loop still visits its rows, which
-// every thread must, but does no work): the result is discarded anyway.
+// Once one piece has failed, the pieces that start after it return at once (the loop still visits
+// its rows, which every thread must, but does no work; pieces already running finish): the
+// result is discarded anyway.
 #pragma once
 
 #include <atomic>
 #include <exception>
-#include <mutex>
 #include <utility>
 
 namespace jpcr {
@@ -31,31 +31,32 @@ class ParallelGuard {
   /// Runs f() unless a piece has failed already; records what it throws. Thread-safe.
   template <typename F>
   void run(F&& f) noexcept {
-    if (failed_.load(std::memory_order_relaxed)) return;
+    if (failed()) return;
     try {
       std::forward<F>(f)();
     } catch (...) {
-      record(std::current_exception());
+      record_current();
     }
   }
 
-  bool failed() const { return failed_.load(std::memory_order_relaxed); }
+  /// In a catch block: records the exception being handled, unless one was recorded before
+  /// (for loops whose body cannot be a lambda: clang rejects a lambda that uses the enclosing
+  /// function's variables inside a generic lambda in an OpenMP region, llvm-project#58421).
+  void record_current() noexcept {
+    if (!failed_.exchange(true, std::memory_order_acq_rel)) error_ = std::current_exception();
+  }
 
-  /// After the region: rethrows the first exception recorded, if any.
+  /// Whether a piece has failed: the pieces that start after it return at once.
+  bool failed() const noexcept { return failed_.load(std::memory_order_relaxed); }
+
+  /// After the region (whose end is a barrier): rethrows the first exception recorded, if any.
   void rethrow() const {
     if (error_) std::rethrow_exception(error_);
   }
 
  private:
-  void record(std::exception_ptr e) noexcept {
-    const std::lock_guard<std::mutex> lock(mutex_);
-    if (!error_) error_ = std::move(e);
-    failed_.store(true, std::memory_order_relaxed);
-  }
-
   std::atomic<bool> failed_{false};
-  std::mutex mutex_;
-  std::exception_ptr error_;
+  std::exception_ptr error_;  // written once, by the thread that set failed_
 };
 
 }  // namespace jpcr

@@ -37,10 +37,19 @@ TEST(ParallelGuard, AnExceptionInTheLoopIsRethrownAfterTheRegionAndTheRestIsSkip
 TEST(ParallelGuard, AFailedPerThreadSetupStillReachesTheLoop) {
   ParallelGuard guard;
   std::atomic<int> visited{0}, done{0};
+  std::atomic<bool> thrown{false};
 #pragma omp parallel
   {
     std::optional<std::vector<double>> buffers;
-    guard.run([&] { throw std::runtime_error("no buffers"); });  // every thread's setup fails
+    // The first thread to get here fails; one that entered before the failure was recorded
+    // succeeds, and the rest skip their setup.
+    guard.run([&] {
+      if (!thrown.exchange(true)) throw std::runtime_error("no buffers");
+      buffers.emplace(8);
+    });
+#pragma omp barrier
+    // Every thread's setup has run or been skipped: from here on no piece of work runs, not
+    // even on a thread whose buffers exist.
 #pragma omp for schedule(dynamic, 4)
     for (int v = 0; v < kRows; ++v) {
       ++visited;  // the loop is reached and run through (no thread waits at its barrier)
