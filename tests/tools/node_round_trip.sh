@@ -51,29 +51,32 @@ print("ok: %d published sd maps equal %s" % (len(got), sys.argv[2]))
 PY
 }
 
+# jpcr_run --method j-ftf --dds on the sequence into $1 with --params $2, while jpcr_dds_echo
+# records topic $3 into file $4 (with option $5, or none when it is "") and topic $6 into $7.
+run_dds_echoing() {
+  local out=$1 opts=(--params "$2" --domain $domain) first second
+  # shellcheck disable=SC2086  # $5: one option or none
+  "$echo_bin" "$3" "${opts[@]}" $5 --timeout 120 > "$4" 2>&1 &
+  first=$!; pids+=($first)
+  "$echo_bin" "$6" "${opts[@]}" --timeout 120 > "$7" 2>&1 &
+  second=$!; pids+=($second)
+  sleep 1
+  expect 0 "j-ftf " -- "$run" --dataset "$tmp/seq" --method j-ftf --out "$out" --dds "${opts[@]}"
+  sleep 1; kill -INT $first $second; wait_bounded $first 10; wait_bounded $second 10
+}
+
 # jpcr_run offline, publishing the same topics (--dds); its path equals its trajectory.txt, and
 # the sd maps it publishes are the ones it writes. The path is transient local; the sd topic is
 # volatile, and jpcr_run does not wait for readers, so a loaded machine may lose the first
 # samples to discovery: each received one must equal its file.
-"$echo_bin" rt/jpcr/path "${dds[@]}" --tum --timeout 120 > "$tmp/run_path.txt" 2>&1 &
-run_echo=$!; pids+=($run_echo)
-"$echo_bin" rt/jpcr/curvature_sd "${dds[@]}" --timeout 120 > "$tmp/run_sd.txt" 2>&1 &
-run_sd_echo=$!; pids+=($run_sd_echo)
-sleep 1
-expect 0 "j-ftf " -- "$run" --dataset "$tmp/seq" --method j-ftf --out "$tmp/off" --dds "${dds[@]}"
-sleep 1; kill -INT $run_echo $run_sd_echo; wait_bounded $run_echo 10; wait_bounded $run_sd_echo 10
+run_dds_echoing "$tmp/off" "$tmp/dds.yaml" rt/jpcr/path "$tmp/run_path.txt" --tum \
+  rt/jpcr/curvature_sd "$tmp/run_sd.txt"
 same_path "$tmp/run_path.txt" "$tmp/off/trajectory.txt" || { echo "FAIL: jpcr_run --dds path"; cat "$tmp/run_path.txt"; fail=1; }
 same_sd "$tmp/run_sd.txt" "$tmp/off/curvature_sd" 1 || { echo "FAIL: jpcr_run --dds sd maps"; cat "$tmp/run_sd.txt"; fail=1; }
 # dds.curvature_sd: false publishes the maps without their sd (which jpcr_run still writes).
 printf 'dds:\n  history_depth: 32\n  image_history_depth: 16\n  curvature_sd: false\n' > "$tmp/no_sd.yaml"
-no_sd=(--params "$tmp/no_sd.yaml" --domain $domain)
-"$echo_bin" rt/jpcr/curvature "${no_sd[@]}" --timeout 120 > "$tmp/no_sd_curv.txt" 2>&1 &
-no_sd_curv=$!; pids+=($no_sd_curv)
-"$echo_bin" rt/jpcr/curvature_sd "${no_sd[@]}" --timeout 120 > "$tmp/no_sd_sd.txt" 2>&1 &
-no_sd_sd=$!; pids+=($no_sd_sd)
-sleep 1
-expect 0 "j-ftf " -- "$run" --dataset "$tmp/seq" --method j-ftf --out "$tmp/off_no_sd" --dds "${no_sd[@]}"
-sleep 1; kill -INT $no_sd_curv $no_sd_sd; wait_bounded $no_sd_curv 10; wait_bounded $no_sd_sd 10
+run_dds_echoing "$tmp/off_no_sd" "$tmp/no_sd.yaml" rt/jpcr/curvature "$tmp/no_sd_curv.txt" "" \
+  rt/jpcr/curvature_sd "$tmp/no_sd_sd.txt"
 n=$(ls "$tmp/off_no_sd/curvature_sd" | wc -l)
 maps=$(grep -c "^image .* 32FC2 " "$tmp/no_sd_curv.txt")
 if [ "$n" != 6 ] || [ "$maps" = 0 ] || grep -q "^curvature_sd " "$tmp/no_sd_sd.txt"; then
