@@ -60,7 +60,7 @@ Image<float> CurvatureWriter::write(const std::string& stamp, const QuadricMap& 
   save_curvature_png(directory_ + "/curvature_png/" + stamp + ".png", map.curvature, colors_);
   Image<float> sd;
   if (spread_) {
-    sd = curvature_spread(map, vertices, spread_->pattern_for(vertices.width()), spread_->fit);
+    sd = curvature_spread(map, vertices, *spread_);
     write_curvature_sd_npy(directory_ + "/curvature_sd/" + stamp + ".npy", sd);
     for (std::size_t i = 0; i < sd.size(); ++i)
       if (map.status[i] == QuadricStatus::kValid) {

@@ -40,6 +40,7 @@
 #include "jpcr/quadric/neighbourhood_pattern.hpp"
 #include "jpcr/quadric/quadric_fit_kernel.hpp"
 #include "jpcr/quadric/quadric_map.hpp"
+#include "jpcr/quadric/quadric_params.hpp"
 #include "jpcr/quadric/vertex_map.hpp"
 
 namespace jpcr {
@@ -54,6 +55,13 @@ inline constexpr double kMinInsideFraction = 0.9;
 /// Throws InputError when map and vertices differ in size.
 Image<float> curvature_spread(const QuadricMap& map, const VertexMap& vertices,
                               const NeighbourhoodPattern& pattern, const QuadricFitParams& fit);
+
+/// The same with the pattern and fit of the parameters the map was made with (the pattern at
+/// the width of `vertices`), as the curvature writers and the DDS publisher call it.
+inline Image<float> curvature_spread(const QuadricMap& map, const VertexMap& vertices,
+                                     const QuadricParams& params) {
+  return curvature_spread(map, vertices, params.pattern_for(vertices.width()), params.fit);
+}
 
 /// The same at one pixel, in double: NaN where curvature_spread gives NaN.
 double curvature_spread_at(const QuadricMap& map, const VertexMap& vertices,

@@ -40,9 +40,7 @@ void PipelinePublisher::keyframe_final(const PipelineBackEnd& pipeline, int keyf
   // matches later would not receive this map anyway.
   if (publish_sd_ && sd.empty() && spread_ && !quadrics.curvature.empty() &&
       publisher_.matched(ResultTopic::kCurvatureSd) > 0) {
-    const VertexMap vertices = compute_vertex_map(frame.depth, frame.camera);
-    own_sd =
-        curvature_spread(quadrics, vertices, spread_->pattern_for(vertices.width()), spread_->fit);
+    own_sd = curvature_spread(quadrics, compute_vertex_map(frame.depth, frame.camera), *spread_);
   }
   const Image<float>& published = !publish_sd_ || sd.empty() ? own_sd : sd;
   publisher_.publish_keyframe(pose, quadrics.curvature, render_curvature(quadrics.curvature),
