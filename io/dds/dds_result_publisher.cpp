@@ -3,6 +3,7 @@
 #include <iostream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "jpcr/io/dds/dds_endpoint.hpp"
 #include "jpcr/io/dds/ros_messages.hpp"
@@ -148,6 +149,27 @@ int DdsResultPublisher::matched(ResultTopic topic) const {
       return writers_->curvature_sd.matched();
   }
   return 0;
+}
+
+int DdsResultPublisher::matched_readers() const {
+  int sum = 0;
+  for (const ResultTopic topic :
+       {ResultTopic::kOdometry, ResultTopic::kKeyframePose, ResultTopic::kPath,
+        ResultTopic::kCurvature, ResultTopic::kCurvatureColor, ResultTopic::kCurvatureSd})
+    sum += matched(topic);
+  return sum;
+}
+
+bool DdsResultPublisher::wait_for_readers(int count, std::chrono::milliseconds timeout,
+                                          const std::function<bool()>& keep_waiting) const {
+  constexpr std::chrono::milliseconds kPoll{5};
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (matched_readers() < count) {
+    if (std::chrono::steady_clock::now() >= deadline) return false;
+    if (keep_waiting && !keep_waiting()) return false;
+    std::this_thread::sleep_for(kPoll);
+  }
+  return true;
 }
 
 }  // namespace jpcr

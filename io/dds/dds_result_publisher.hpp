@@ -16,6 +16,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <ostream>
 #include <string>
@@ -88,6 +89,15 @@ class DdsResultPublisher {
 
   /// Readers matched on `topic` (for logs and for waiting in tests).
   int matched(ResultTopic topic) const;
+  /// Reader endpoints matched, summed over the six topics (a process reading two topics counts
+  /// twice).
+  int matched_readers() const;
+  /// Waits until matched_readers() >= count, `timeout` in all: the result topics other than the
+  /// path keep no history for late readers, so a producer faster than discovery (jpcr_run --dds)
+  /// waits for its readers before the first sample. False on timeout, or as soon as keep_waiting
+  /// (when given) says no.
+  bool wait_for_readers(int count, std::chrono::milliseconds timeout,
+                        const std::function<bool()>& keep_waiting = {}) const;
   /// Samples Cyclone refused to publish, over all topics.
   std::size_t writes_failed() const { return writes_failed_; }
 

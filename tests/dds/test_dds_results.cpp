@@ -81,6 +81,21 @@ TEST_F(DdsResults, TopicNamesAndQosFollowRosConventions) {
   EXPECT_FALSE(result_topic_qos(DdsConfig{}, ResultTopic::kOdometry).transient_local);
 }
 
+TEST_F(DdsResults, WaitsForReadersCountedOverTheTopics) {
+  EXPECT_EQ(publisher_.matched_readers(), 0);
+  EXPECT_FALSE(publisher_.wait_for_readers(1, milliseconds(50)));
+  bool asked = false;
+  EXPECT_FALSE(publisher_.wait_for_readers(1, kTimeout, [&] { return !(asked = true); }));
+  EXPECT_TRUE(asked);  // said no at once, not after the timeout
+  auto odom = reader<RosOdometry>(ResultTopic::kOdometry);
+  auto sd = reader<RosImage>(ResultTopic::kCurvatureSd);
+  ASSERT_TRUE(publisher_.wait_for_readers(2, kTimeout));
+  EXPECT_EQ(publisher_.matched(ResultTopic::kOdometry), 1);
+  EXPECT_EQ(publisher_.matched(ResultTopic::kCurvatureSd), 1);
+  EXPECT_EQ(publisher_.matched_readers(), 2);
+  EXPECT_FALSE(publisher_.wait_for_readers(3, milliseconds(50)));
+}
+
 TEST_F(DdsResults, KeyframePoseArrives) {
   auto poses = reader<RosPoseStamped>(ResultTopic::kKeyframePose);
   ASSERT_TRUE(

@@ -60,19 +60,18 @@ run_dds_echoing() {
   first=$!; pids+=($first)
   "$echo_bin" "$6" "${opts[@]}" --timeout 120 > "$7" 2>&1 &
   second=$!; pids+=($second)
-  sleep 1
-  expect 0 "j-ftf " -- "$run" --dataset "$tmp/seq" --method j-ftf --out "$out" --dds "${opts[@]}"
+  expect 0 "j-ftf " -- "$run" --dataset "$tmp/seq" --method j-ftf --out "$out" --dds "${opts[@]}" \
+    --wait-readers 2 --wait-timeout 60
   sleep 1; kill -INT $first $second; wait_bounded $first 10; wait_bounded $second 10
 }
 
 # jpcr_run offline, publishing the same topics (--dds); its path equals its trajectory.txt, and
-# the sd maps it publishes are the ones it writes. The path is transient local; the sd topic is
-# volatile, and jpcr_run does not wait for readers, so a loaded machine may lose the first
-# samples to discovery: each received one must equal its file.
+# the sd maps it publishes are the ones it writes, all 6 of them: the sd topic is volatile, so
+# jpcr_run waits for the two echoes' readers (--wait-readers 2) before its first sample.
 run_dds_echoing "$tmp/off" "$tmp/dds.yaml" rt/jpcr/path "$tmp/run_path.txt" --tum \
   rt/jpcr/curvature_sd "$tmp/run_sd.txt"
 same_path "$tmp/run_path.txt" "$tmp/off/trajectory.txt" || { echo "FAIL: jpcr_run --dds path"; cat "$tmp/run_path.txt"; fail=1; }
-same_sd "$tmp/run_sd.txt" "$tmp/off/curvature_sd" 1 || { echo "FAIL: jpcr_run --dds sd maps"; cat "$tmp/run_sd.txt"; fail=1; }
+same_sd "$tmp/run_sd.txt" "$tmp/off/curvature_sd" 6 || { echo "FAIL: jpcr_run --dds sd maps"; cat "$tmp/run_sd.txt"; fail=1; }
 # dds.curvature_sd: false publishes the maps without their sd (which jpcr_run still writes).
 printf 'dds:\n  history_depth: 32\n  image_history_depth: 16\n  curvature_sd: false\n' > "$tmp/no_sd.yaml"
 run_dds_echoing "$tmp/off_no_sd" "$tmp/no_sd.yaml" rt/jpcr/curvature "$tmp/no_sd_curv.txt" "" \
@@ -230,4 +229,14 @@ expect 2 "domain must be in 0..232" -- "$node" --domain 300
 printf 'pipeline:\n  window: 99\n' > "$tmp/bad.yaml"
 expect 1 "error: .*window" -- "$node" --params "$tmp/bad.yaml"
 expect 1 "error: .*nosuch" -- "$node" --params "$tmp/nosuch.yaml"
+# jpcr_run's wait for readers: bounded, then it publishes anyway; its options need --dds.
+expect 0 "0 of 1 DDS readers matched; publishing anyway" -- "$run" --dataset "$tmp/seq" \
+  --method icp-ftf --frames 0:2 --out "$tmp/no_readers" --dds "${dds[@]}" --wait-readers 1 \
+  --wait-timeout 0.3
+expect 2 "--wait-readers needs --dds" -- "$run" --dataset "$tmp/seq" --out "$tmp/x" \
+  --wait-readers 1
+expect 2 "--wait-readers must be 0..1000" -- "$run" --dataset "$tmp/seq" --out "$tmp/x" --dds \
+  --wait-readers -1
+expect 2 "--wait-timeout must be 0..86400 s" -- "$run" --dataset "$tmp/seq" --out "$tmp/x" \
+  --dds --wait-timeout nan
 exit $fail

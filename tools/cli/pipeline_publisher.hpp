@@ -21,6 +21,7 @@
 
 #include <chrono>
 #include <cstddef>
+#include <functional>
 #include <optional>
 #include <utility>
 
@@ -63,6 +64,12 @@ class PipelinePublisher {
   /// DdsResultPublisher::set_camera_frame_id.
   void set_camera_frame_id(const std::string& id) { publisher_.set_camera_frame_id(id); }
   bool flush(std::chrono::milliseconds timeout) const { return publisher_.flush(timeout); }
+  /// DdsResultPublisher::wait_for_readers.
+  bool wait_for_readers(int count, std::chrono::milliseconds timeout,
+                        const std::function<bool()>& keep_waiting = {}) const {
+    return publisher_.wait_for_readers(count, timeout, keep_waiting);
+  }
+  int matched_readers() const { return publisher_.matched_readers(); }
   std::size_t keyframes_published() const { return keyframes_published_; }
   /// Samples Cyclone refused to publish (DdsResultPublisher::writes_failed).
   std::size_t writes_failed() const { return publisher_.writes_failed(); }

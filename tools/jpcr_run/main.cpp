@@ -6,6 +6,7 @@
 #include <iostream>
 #include <optional>
 #include <sstream>
+#include <string>
 
 #include "cli/arguments.hpp"
 #include "cli/dataset_run_checks.hpp"
@@ -89,7 +90,13 @@ int run_main(int argc, char** argv) {
             " over DDS"
             " (as jpcr_node does; --params' dds: section, --domain, --cyclone-uri)");
   args.option("domain", "DDS domain id 0..232 with --dds (overrides dds.domain_id)")
-      .option("cyclone-uri", "Cyclone DDS configuration with --dds, file://PATH or XML");
+      .option("cyclone-uri", "Cyclone DDS configuration with --dds, file://PATH or XML")
+      .option("wait-readers",
+              "with --dds, before the first frame wait until N readers are matched, counted over "
+              "the topics (one per topic each process reads): every topic but path keeps no "
+              "history for late readers (default 0: no wait)")
+      .option("wait-timeout",
+              "seconds --wait-readers waits at most, then the run goes on (default 10)");
 #endif
   args.epilog(
       "example (60 frames of the walk travel far enough for two keyframes):\n"
@@ -124,8 +131,15 @@ int run_main(int argc, char** argv) {
                 << " runs on the CPU (only J-ftf has a CUDA kernel; the keyframes' Quad IT maps "
                    "are fitted on the CPU)\n";
 #ifdef JPCR_HAVE_DDS
-    if (!args.get_flag("dds") && (args.has("domain") || args.has("cyclone-uri")))
-      throw cli::UsageError("--domain and --cyclone-uri need --dds");
+    for (const char* option : {"domain", "cyclone-uri", "wait-readers", "wait-timeout"})
+      if (!args.get_flag("dds") && args.has(option))
+        throw cli::UsageError(std::string("--") + option + " needs --dds");
+    const int wait_readers = args.has("wait-readers") ? args.get_int("wait-readers") : 0;
+    if (wait_readers < 0 || wait_readers > 1000)
+      throw cli::UsageError("--wait-readers must be 0..1000");
+    const double wait_timeout = args.has("wait-timeout") ? args.get_double("wait-timeout") : 10.0;
+    if (!(wait_timeout >= 0.0 && wait_timeout <= 86400.0))
+      throw cli::UsageError("--wait-timeout must be 0..86400 s");
 #endif
     std::optional<CameraIntrinsics> camera;
     if (args.has("config")) camera = load_camera_yaml(args.get("config"));
@@ -183,6 +197,16 @@ int run_main(int argc, char** argv) {
         refiners);
     self = &runner;
     const std::string unchanged = "; " + out.target() + " is left as it was";
+#ifdef JPCR_HAVE_DDS
+    if (dds && wait_readers > 0) {
+      std::cerr << "jpcr_run: waiting up to " << wait_timeout << " s for " << wait_readers
+                << " DDS readers\n";
+      const auto timeout = std::chrono::milliseconds(static_cast<long>(wait_timeout * 1000.0));
+      if (!dds->wait_for_readers(wait_readers, timeout, [] { return !cli::stop_requested(); }))
+        std::cerr << "jpcr_run: " << dds->matched_readers() << " of " << wait_readers
+                  << " DDS readers matched; publishing anyway\n";
+    }
+#endif
     cli::Progress progress("jpcr_run");
     // A frame that completes a J-full window takes tens of seconds at 640x480 on the CPU.
     const auto say = [&progress](const std::string& line) { progress.note(line); };
