@@ -1,5 +1,6 @@
 #include "jpcr/quadric/sample_columns.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
@@ -133,53 +134,98 @@ inline void load_lanes(Vec& x, const Lane* p) {
   std::memcpy(&x, p, sizeof(Vec));
 }
 
-// Dot products along the samples, four at a time so that each load of column a serves four.
-template <typename Lane>
-JPCR_SIMD_CLONES void products(const Lane* columns, int n, int stride, int cols, double* Y) {
+// Σ of each of two registers' lanes, in double. The float lanes are widened and summed pairwise:
+// in double a sum of a few floats is exact unless their magnitudes are 2^29 apart, so these are
+// the lanes' sums as one by one.
+template <typename Vec>
+inline void totals(const Vec& t, const Vec& u, double& sum_t, double& sum_u) {
+  if constexpr (sizeof(t[0]) == sizeof(float)) {
+    typedef double Wide __attribute__((vector_size(32)));
+    const Wide a = __builtin_convertvector(__builtin_shufflevector(t, t, 0, 1, 2, 3), Wide) +
+                   __builtin_convertvector(__builtin_shufflevector(t, t, 4, 5, 6, 7), Wide);
+    const Wide b = __builtin_convertvector(__builtin_shufflevector(u, u, 0, 1, 2, 3), Wide) +
+                   __builtin_convertvector(__builtin_shufflevector(u, u, 4, 5, 6, 7), Wide);
+    const Wide h =
+        __builtin_shufflevector(a, b, 0, 4, 2, 6) + __builtin_shufflevector(a, b, 1, 5, 3, 7);
+    sum_t = h[0] + h[2];
+    sum_u = h[1] + h[3];
+  } else {
+    sum_t = ((t[0] + t[1]) + t[2]) + t[3];
+    sum_u = ((u[0] + u[1]) + u[2]) + u[3];
+  }
+}
+
+// The R x C block of Y at rows a, columns b: R + C loads serve R·C products, and the R·C sums
+// are independent (no sum waits for the one before).
+template <typename Lane, int R, int C>
+__attribute__((always_inline)) inline void product_block(const Lane* columns, int n, int stride,
+                                                         int a, int b, double* Y) {
   using Vec = typename LaneVector<Lane>::type;
   constexpr int kLanes = sizeof(Vec) / sizeof(Lane);
-  const auto col = [columns, stride](int c) {
-    return columns + static_cast<std::size_t>(c) * stride;
-  };
-  const auto total = [](const Vec& t) {
-    double sum = 0.0;
-    for (int lane = 0; lane < kLanes; ++lane)
-      sum += t[lane];
-    return sum;
-  };
-  for (int a = 0; a < cols; ++a) {
-    const Lane* ca = col(a);
-    int b = 0;
-    for (; b + 3 <= a; b += 4) {
-      const Lane *c0 = col(b), *c1 = col(b + 1), *c2 = col(b + 2), *c3 = col(b + 3);
-      Vec t0 = {}, t1 = {}, t2 = {}, t3 = {};
-      for (int k = 0; k < n; k += kLanes) {
-        Vec x, y0, y1, y2, y3;
-        load_lanes(x, ca + k);
-        load_lanes(y0, c0 + k);
-        load_lanes(y1, c1 + k);
-        load_lanes(y2, c2 + k);
-        load_lanes(y3, c3 + k);
-        t0 += x * y0;
-        t1 += x * y1;
-        t2 += x * y2;
-        t3 += x * y3;
+  const Lane* ca[R];
+  const Lane* cb[C];
+  for (int r = 0; r < R; ++r)
+    ca[r] = columns + static_cast<std::size_t>(a + r) * stride;
+  for (int c = 0; c < C; ++c)
+    cb[c] = columns + static_cast<std::size_t>(b + c) * stride;
+  Vec t[R][C] = {};
+  for (int k = 0; k < n; k += kLanes) {
+    Vec x[R], y[C];
+#pragma GCC unroll 4
+    for (int r = 0; r < R; ++r)
+      load_lanes(x[r], ca[r] + k);
+#pragma GCC unroll 4
+    for (int c = 0; c < C; ++c)
+      load_lanes(y[c], cb[c] + k);
+#pragma GCC unroll 4
+    for (int r = 0; r < R; ++r)
+#pragma GCC unroll 4
+      for (int c = 0; c < C; ++c)
+        t[r][c] += x[r] * y[c];
+  }
+  double sums[R * C + 1];
+  const Vec* flat = &t[0][0];
+  for (int i = 0; i < R * C; i += 2)  // an odd last one is paired with itself
+    totals(flat[i], flat[i + 1 < R * C ? i + 1 : i], sums[i], sums[i + 1]);
+  for (int r = 0; r < R; ++r)
+    for (int c = 0; c < C; ++c)
+      Y[(a + r) * 10 + b + c] = Y[(b + c) * 10 + a + r] = sums[r * C + c];
+}
+
+// Dot products along the samples in blocks of 2 rows x 4 columns up to the diagonal. A block
+// across it computes a few products of the upper triangle too: the same lanes in the same order,
+// so both triangles get the same sums.
+template <typename Lane>
+JPCR_SIMD_CLONES void products(const Lane* columns, int n, int stride, int cols, double* Y) {
+  for (int a = 0; a < cols; a += 2) {
+    const int rows = std::min(2, cols - a);
+    for (int b = 0; b < a + rows; b += 4) {
+      switch (rows * 4 + std::min(4, cols - b)) {
+        case 5:
+          product_block<Lane, 1, 1>(columns, n, stride, a, b, Y);
+          break;
+        case 6:
+          product_block<Lane, 1, 2>(columns, n, stride, a, b, Y);
+          break;
+        case 7:
+          product_block<Lane, 1, 3>(columns, n, stride, a, b, Y);
+          break;
+        case 8:
+          product_block<Lane, 1, 4>(columns, n, stride, a, b, Y);
+          break;
+        case 9:
+          product_block<Lane, 2, 1>(columns, n, stride, a, b, Y);
+          break;
+        case 10:
+          product_block<Lane, 2, 2>(columns, n, stride, a, b, Y);
+          break;
+        case 11:
+          product_block<Lane, 2, 3>(columns, n, stride, a, b, Y);
+          break;
+        default:
+          product_block<Lane, 2, 4>(columns, n, stride, a, b, Y);
+          break;
       }
-      Y[a * 10 + b] = Y[b * 10 + a] = total(t0);
-      Y[a * 10 + b + 1] = Y[(b + 1) * 10 + a] = total(t1);
-      Y[a * 10 + b + 2] = Y[(b + 2) * 10 + a] = total(t2);
-      Y[a * 10 + b + 3] = Y[(b + 3) * 10 + a] = total(t3);
-    }
-    for (; b <= a; ++b) {
-      const Lane* cb = col(b);
-      Vec t = {};
-      for (int k = 0; k < n; k += kLanes) {
-        Vec x, y;
-        load_lanes(x, ca + k);
-        load_lanes(y, cb + k);
-        t += x * y;
-      }
-      Y[a * 10 + b] = Y[b * 10 + a] = total(t);
     }
   }
 }
