@@ -67,8 +67,10 @@ template <typename Lane>
 SampleCosts held_sample_costs(const QuadricScalars<Lane>& qs, const GatheredSamples<Lane>& s,
                               Lane gate, Lane n0);
 
-/// Y = Σ_k c_k c_kᵀ over the first `cols` columns (n samples, stride lanes apart), into the
-/// row-major 10 x 10 array Y (both triangles), accumulated in lanes and summed in double.
+/// Y = Σ_k c_k c_kᵀ over the first `cols` ≤ 10 columns (n samples, stride lanes apart), into the
+/// row-major 10 x 10 array Y (both triangles of its top-left cols x cols), accumulated in lanes
+/// and summed in double. n is a multiple of one register's lanes (32 bytes) and ≤ stride, the
+/// samples past the gathered ones zero (GatheredFrameTerms, CurvatureSpread pad them so).
 template <typename Lane>
 void column_products(const Lane* columns, int n, int stride, int cols, double* Y);
 

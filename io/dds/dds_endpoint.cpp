@@ -145,14 +145,19 @@ int DdsEndpoint::matched_keep_last_writers() const {
   });
 }
 
-bool DdsEndpoint::wait_matched(int count, std::chrono::steady_clock::time_point deadline,
-                               const std::function<bool()>& keep_waiting) const {
-  while (matched() < count) {
+bool poll_until(const std::function<bool()>& done, std::chrono::steady_clock::time_point deadline,
+                const std::function<bool()>& keep_waiting) {
+  while (!done()) {
     if (std::chrono::steady_clock::now() >= deadline) return false;
     if (keep_waiting && !keep_waiting()) return false;
     std::this_thread::sleep_for(kMatchPollInterval);
   }
   return true;
+}
+
+bool DdsEndpoint::wait_matched(int count, std::chrono::steady_clock::time_point deadline,
+                               const std::function<bool()>& keep_waiting) const {
+  return poll_until([&] { return matched() >= count; }, deadline, keep_waiting);
 }
 
 bool DdsEndpoint::wait_for_acks(std::chrono::milliseconds timeout) const {

@@ -41,6 +41,12 @@ class DdsEntity {
   dds_entity_t handle_ = 0;
 };
 
+/// Polls `done` every few milliseconds until it is true (true), `deadline` passes or
+/// keep_waiting (when given, e.g. "no stop signal yet") says no (false). Cyclone reports
+/// discovery as a status to read, so the waits for matching endpoints poll it.
+bool poll_until(const std::function<bool()>& done, std::chrono::steady_clock::time_point deadline,
+                const std::function<bool()>& keep_waiting = {});
+
 /// A topic plus a writer or a reader on it (the untyped part of DdsWriter and DdsReader).
 class DdsEndpoint {
  public:

@@ -3,7 +3,6 @@
 #include <iostream>
 #include <stdexcept>
 #include <string>
-#include <thread>
 
 #include "jpcr/io/dds/dds_endpoint.hpp"
 #include "jpcr/io/dds/ros_messages.hpp"
@@ -162,14 +161,8 @@ int DdsResultPublisher::matched_readers() const {
 
 bool DdsResultPublisher::wait_for_readers(int count, std::chrono::milliseconds timeout,
                                           const std::function<bool()>& keep_waiting) const {
-  constexpr std::chrono::milliseconds kPoll{5};
-  const auto deadline = std::chrono::steady_clock::now() + timeout;
-  while (matched_readers() < count) {
-    if (std::chrono::steady_clock::now() >= deadline) return false;
-    if (keep_waiting && !keep_waiting()) return false;
-    std::this_thread::sleep_for(kPoll);
-  }
-  return true;
+  return poll_until([&] { return matched_readers() >= count; },
+                    std::chrono::steady_clock::now() + timeout, keep_waiting);
 }
 
 }  // namespace jpcr

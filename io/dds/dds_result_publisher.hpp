@@ -95,7 +95,9 @@ class DdsResultPublisher {
   /// Waits until matched_readers() >= count, `timeout` in all: the result topics other than the
   /// path keep no history for late readers, so a producer faster than discovery (jpcr_run --dds)
   /// waits for its readers before the first sample. False on timeout, or as soon as keep_waiting
-  /// (when given) says no.
+  /// (when given) says no. These are this writer's matches: a reader that has not yet matched
+  /// the writer in turn (discovery runs both ways, on loopback within milliseconds) can still
+  /// miss what is written before it has.
   bool wait_for_readers(int count, std::chrono::milliseconds timeout,
                         const std::function<bool()>& keep_waiting = {}) const;
   /// Samples Cyclone refused to publish, over all topics.

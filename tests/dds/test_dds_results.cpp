@@ -3,6 +3,7 @@
 // the split deployment's keyframe messages.
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -84,16 +85,27 @@ TEST_F(DdsResults, TopicNamesAndQosFollowRosConventions) {
 TEST_F(DdsResults, WaitsForReadersCountedOverTheTopics) {
   EXPECT_EQ(publisher_.matched_readers(), 0);
   EXPECT_FALSE(publisher_.wait_for_readers(1, milliseconds(50)));
-  bool asked = false;
-  EXPECT_FALSE(publisher_.wait_for_readers(1, kTimeout, [&] { return !(asked = true); }));
-  EXPECT_TRUE(asked);  // said no at once, not after the timeout
+  // keep_waiting saying no ends the wait at once, not at the timeout.
+  int asked = 0;
+  const auto start = std::chrono::steady_clock::now();
+  EXPECT_FALSE(publisher_.wait_for_readers(1, kTimeout, [&] { return ++asked < 3; }));
+  EXPECT_EQ(asked, 3);
+  EXPECT_LT(std::chrono::steady_clock::now() - start, kTimeout / 5);
+  // One reader per topic: each counts.
   auto odom = reader<RosOdometry>(ResultTopic::kOdometry);
+  auto pose = reader<RosPoseStamped>(ResultTopic::kKeyframePose);
+  auto path = reader<RosPath>(ResultTopic::kPath);
+  auto curvature = reader<RosImage>(ResultTopic::kCurvature);
+  auto color = reader<RosImage>(ResultTopic::kCurvatureColor);
+  ASSERT_TRUE(publisher_.wait_for_readers(5, kTimeout));
+  EXPECT_FALSE(publisher_.wait_for_readers(6, milliseconds(50)));
   auto sd = reader<RosImage>(ResultTopic::kCurvatureSd);
-  ASSERT_TRUE(publisher_.wait_for_readers(2, kTimeout));
-  EXPECT_EQ(publisher_.matched(ResultTopic::kOdometry), 1);
-  EXPECT_EQ(publisher_.matched(ResultTopic::kCurvatureSd), 1);
-  EXPECT_EQ(publisher_.matched_readers(), 2);
-  EXPECT_FALSE(publisher_.wait_for_readers(3, milliseconds(50)));
+  ASSERT_TRUE(publisher_.wait_for_readers(6, kTimeout));
+  for (const ResultTopic topic :
+       {ResultTopic::kOdometry, ResultTopic::kKeyframePose, ResultTopic::kPath,
+        ResultTopic::kCurvature, ResultTopic::kCurvatureColor, ResultTopic::kCurvatureSd})
+    EXPECT_EQ(publisher_.matched(topic), 1) << to_string(topic);
+  EXPECT_EQ(publisher_.matched_readers(), 6);
 }
 
 TEST_F(DdsResults, KeyframePoseArrives) {

@@ -140,6 +140,8 @@ int run_main(int argc, char** argv) {
     const double wait_timeout = args.has("wait-timeout") ? args.get_double("wait-timeout") : 10.0;
     if (!(wait_timeout >= 0.0 && wait_timeout <= 86400.0))
       throw cli::UsageError("--wait-timeout must be 0..86400 s");
+    if (args.has("wait-timeout") && wait_readers == 0)
+      std::cerr << "jpcr_run: warning: --wait-timeout has no effect without --wait-readers\n";
 #endif
     std::optional<CameraIntrinsics> camera;
     if (args.has("config")) camera = load_camera_yaml(args.get("config"));
@@ -199,10 +201,11 @@ int run_main(int argc, char** argv) {
     const std::string unchanged = "; " + out.target() + " is left as it was";
 #ifdef JPCR_HAVE_DDS
     if (dds && wait_readers > 0) {
-      std::cerr << "jpcr_run: waiting up to " << wait_timeout << " s for " << wait_readers
-                << " DDS readers\n";
+      std::cerr << "jpcr_run: waiting up to " << wait_timeout << " s for DDS readers ("
+                << wait_readers << " wanted)\n";
       const auto timeout = std::chrono::milliseconds(static_cast<long>(wait_timeout * 1000.0));
-      if (!dds->wait_for_readers(wait_readers, timeout, [] { return !cli::stop_requested(); }))
+      if (!dds->wait_for_readers(wait_readers, timeout, [] { return !cli::stop_requested(); }) &&
+          !cli::stop_requested())
         std::cerr << "jpcr_run: " << dds->matched_readers() << " of " << wait_readers
                   << " DDS readers matched; publishing anyway\n";
     }
