@@ -155,19 +155,20 @@ inline void totals(const Vec& t, const Vec& u, double& sum_t, double& sum_u) {
   }
 }
 
-// The R x C block of Y at rows a, columns b: R + C loads serve R·C products, and the R·C sums
-// are independent (no sum waits for the one before).
-template <typename Lane, int R, int C>
+// The 2 x 4 block of Y at rows a, a + 1 and columns b..b + 3: 6 loads serve 8 products, and the
+// 8 sums are independent (no sum waits for the one before). Rows and columns at or past `cols`
+// read the last column instead, and their sums are not stored.
+template <typename Lane>
 __attribute__((always_inline)) inline void product_block(const Lane* columns, int n, int stride,
-                                                         int a, int b, double* Y) {
+                                                         int cols, int a, int b, double* Y) {
   using Vec = typename LaneVector<Lane>::type;
   constexpr int kLanes = sizeof(Vec) / sizeof(Lane);
-  const Lane* ca[R];
-  const Lane* cb[C];
-  for (int r = 0; r < R; ++r)
-    ca[r] = columns + static_cast<std::size_t>(a + r) * stride;
-  for (int c = 0; c < C; ++c)
-    cb[c] = columns + static_cast<std::size_t>(b + c) * stride;
+  constexpr int R = 2, C = 4;
+  const auto col = [&](int c) {
+    return columns + static_cast<std::size_t>(std::min(c, cols - 1)) * stride;
+  };
+  const Lane* ca[R] = {col(a), col(a + 1)};
+  const Lane* cb[C] = {col(b), col(b + 1), col(b + 2), col(b + 3)};
   Vec t[R * C] = {};  // t[r * C + c]: the sum of rows a + r and b + c
   for (int k = 0; k < n; k += kLanes) {
     Vec x[R], y[C];
@@ -183,11 +184,11 @@ __attribute__((always_inline)) inline void product_block(const Lane* columns, in
       for (int c = 0; c < C; ++c)
         t[r * C + c] += x[r] * y[c];
   }
-  double sums[R * C + 1];
-  for (int i = 0; i < R * C; i += 2)  // an odd last one is paired with itself
-    totals(t[i], t[i + 1 < R * C ? i + 1 : i], sums[i], sums[i + 1]);
-  for (int r = 0; r < R; ++r)
-    for (int c = 0; c < C; ++c)
+  double sums[R * C];
+  for (int i = 0; i < R * C; i += 2)
+    totals(t[i], t[i + 1], sums[i], sums[i + 1]);
+  for (int r = 0; r < R && a + r < cols; ++r)
+    for (int c = 0; c < C && b + c < cols; ++c)
       Y[(a + r) * 10 + b + c] = Y[(b + c) * 10 + a + r] = sums[r * C + c];
 }
 
@@ -196,37 +197,9 @@ __attribute__((always_inline)) inline void product_block(const Lane* columns, in
 // so both triangles get the same sums.
 template <typename Lane>
 JPCR_SIMD_CLONES void products(const Lane* columns, int n, int stride, int cols, double* Y) {
-  for (int a = 0; a < cols; a += 2) {
-    const int rows = std::min(2, cols - a);
-    for (int b = 0; b < a + rows; b += 4) {
-      switch (rows * 4 + std::min(4, cols - b)) {
-        case 5:
-          product_block<Lane, 1, 1>(columns, n, stride, a, b, Y);
-          break;
-        case 6:
-          product_block<Lane, 1, 2>(columns, n, stride, a, b, Y);
-          break;
-        case 7:
-          product_block<Lane, 1, 3>(columns, n, stride, a, b, Y);
-          break;
-        case 8:
-          product_block<Lane, 1, 4>(columns, n, stride, a, b, Y);
-          break;
-        case 9:
-          product_block<Lane, 2, 1>(columns, n, stride, a, b, Y);
-          break;
-        case 10:
-          product_block<Lane, 2, 2>(columns, n, stride, a, b, Y);
-          break;
-        case 11:
-          product_block<Lane, 2, 3>(columns, n, stride, a, b, Y);
-          break;
-        default:
-          product_block<Lane, 2, 4>(columns, n, stride, a, b, Y);
-          break;
-      }
-    }
-  }
+  for (int a = 0; a < cols; a += 2)
+    for (int b = 0; b <= std::min(a + 1, cols - 1); b += 4)
+      product_block<Lane>(columns, n, stride, cols, a, b, Y);
 }
 
 }  // namespace
