@@ -32,8 +32,8 @@ struct DdsConfig {
   std::string camera_info_topic = "rt/camera/depth/camera_info";  // input sensor_msgs/CameraInfo
   std::string world_frame_id = "map";                             // header.frame_id of poses
   std::string camera_frame_id = "camera_depth_optical_frame";     // odom child, image frames
-  int history_depth = 10;       // samples, KEEP_LAST depth of the volatile topics, and of path
-                                // when its paths are incremental (keep_history: false)
+  int history_depth = 10;       // samples, KEEP_LAST depth of the pose topics and camera_info,
+                                // and of path when its paths are incremental (keep_history: false)
   int image_history_depth = 2;  // samples, KEEP_LAST depth of image topics (MB each)
   int keyframe_queue = 32;      // keyframes a split back end holds unread (MB each)
   // Publish each keyframe's curvature sd map (topic curvature_sd, 32FC1; computed per keyframe,

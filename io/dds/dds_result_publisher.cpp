@@ -55,15 +55,17 @@ std::string result_topic_name(const DdsConfig& config, ResultTopic topic) {
 }
 
 DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic, PathUpdates paths) {
+  // Every topic is transient local: the writer keeps its last `depth` samples for a reader that
+  // asks for them, so such a reader loses nothing to discovery; a volatile reader matches too.
   switch (topic) {
     case ResultTopic::kPath:
       return DdsQos{true, true, paths == PathUpdates::kWhole ? 1 : config.history_depth};
     case ResultTopic::kCurvature:
     case ResultTopic::kCurvatureColor:
     case ResultTopic::kCurvatureSd:
-      return DdsQos{true, false, config.image_history_depth};
+      return DdsQos{true, true, config.image_history_depth};
     default:
-      return DdsQos{true, false, config.history_depth};
+      return DdsQos{true, true, config.history_depth};
   }
 }
 

@@ -1,13 +1,18 @@
 // Publishes jpcr's results as ROS 2 topics under DdsConfig::topic_prefix (default rt/jpcr/):
 //
-//   topic            type                      QoS
-//   odom             nav_msgs/Odometry         reliable, volatile, keep last history_depth
-//   keyframe_pose    geometry_msgs/PoseStamped reliable, volatile, keep last history_depth
-//   path             nav_msgs/Path             reliable, transient local, keep last 1
+//   topic            type                      QoS (all reliable, transient local)
+//   odom             nav_msgs/Odometry         keep last history_depth
+//   keyframe_pose    geometry_msgs/PoseStamped keep last history_depth
+//   path             nav_msgs/Path             keep last 1
 //                                              (keep last history_depth: PathUpdates::kIncremental)
-//   curvature        sensor_msgs/Image 32FC2   reliable, volatile, keep last image_history_depth
-//   curvature_color  sensor_msgs/Image rgb8    reliable, volatile, keep last image_history_depth
-//   curvature_sd     sensor_msgs/Image 32FC1   reliable, volatile, keep last image_history_depth
+//   curvature        sensor_msgs/Image 32FC2   keep last image_history_depth
+//   curvature_color  sensor_msgs/Image rgb8    keep last image_history_depth
+//   curvature_sd     sensor_msgs/Image 32FC1   keep last image_history_depth
+//
+// Transient local: each writer keeps its last samples (the depth above) while it lives, and a
+// reader that asks for transient-local durability gets them on matching, so it loses nothing
+// written before discovery completed; a volatile reader (ROS 2's default) matches as well and
+// gets only what comes after. The images cost image_history_depth maps of memory per topic.
 //
 // Poses are T_wc (camera to world) with header.frame_id = world_frame_id; images and odom's child
 // frame carry the camera frame: camera_frame_id until set_camera_frame_id names the received
@@ -51,7 +56,7 @@ enum class PathUpdates { kWhole, kIncremental };
 const char* to_string(ResultTopic topic);
 /// PREFIX + name.
 std::string result_topic_name(const DdsConfig& config, ResultTopic topic);
-/// The QoS of the table above; readers that want every sample use the same.
+/// The QoS of the table above; readers that want every sample use the same (transient local).
 DdsQos result_topic_qos(const DdsConfig& config, ResultTopic topic,
                         PathUpdates paths = PathUpdates::kWhole);
 
@@ -92,12 +97,12 @@ class DdsResultPublisher {
   /// Reader endpoints matched, summed over the six topics (a process reading two topics counts
   /// twice).
   int matched_readers() const;
-  /// Waits until matched_readers() >= count, `timeout` in all: the result topics other than the
-  /// path keep no history for late readers, so a producer faster than discovery (jpcr_run --dds)
-  /// waits for its readers before the first sample. False on timeout, or as soon as keep_waiting
-  /// (when given) says no. These are this writer's matches: a reader that has not yet matched
-  /// the writer in turn (discovery runs both ways, on loopback within milliseconds) can still
-  /// miss what is written before it has.
+  /// Waits until matched_readers() >= count, `timeout` in all, so that a producer faster than
+  /// discovery (jpcr_run --dds) writes its first sample once its readers are there; a writer
+  /// that is gone keeps no history. False on timeout, or as soon as keep_waiting (when given)
+  /// says no. These are this writer's matches: a volatile reader that has not yet matched the
+  /// writer in turn (discovery runs both ways, on loopback within milliseconds) can still miss
+  /// what is written before it has; a transient-local reader gets it (the last `depth` samples).
   bool wait_for_readers(int count, std::chrono::milliseconds timeout,
                         const std::function<bool()>& keep_waiting = {}) const;
   /// Samples Cyclone refused to publish, over all topics.

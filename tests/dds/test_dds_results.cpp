@@ -72,14 +72,15 @@ TEST_F(DdsResults, TopicNamesAndQosFollowRosConventions) {
             "rt/jpcr/curvature_color");
   EXPECT_EQ(result_topic_name(DdsConfig{}, ResultTopic::kCurvatureSd), "rt/jpcr/curvature_sd");
   const DdsQos sd = result_topic_qos(DdsConfig{}, ResultTopic::kCurvatureSd);
-  EXPECT_TRUE(sd.reliable && !sd.transient_local && sd.depth == DdsConfig{}.image_history_depth);
+  EXPECT_TRUE(sd.reliable && sd.transient_local && sd.depth == DdsConfig{}.image_history_depth);
   const DdsQos path = result_topic_qos(DdsConfig{}, ResultTopic::kPath);
   EXPECT_TRUE(path.reliable && path.transient_local && path.depth == 1);
   DdsConfig deep;
   deep.history_depth = 7;
   const DdsQos increments = result_topic_qos(deep, ResultTopic::kPath, PathUpdates::kIncremental);
   EXPECT_TRUE(increments.reliable && increments.transient_local && increments.depth == 7);
-  EXPECT_FALSE(result_topic_qos(DdsConfig{}, ResultTopic::kOdometry).transient_local);
+  const DdsQos odom = result_topic_qos(DdsConfig{}, ResultTopic::kOdometry);
+  EXPECT_TRUE(odom.reliable && odom.transient_local && odom.depth == DdsConfig{}.history_depth);
 }
 
 TEST_F(DdsResults, WaitsForReadersCountedOverTheTopics) {
@@ -199,6 +200,40 @@ TEST_F(DdsResults, EveryIncrementalPathArrivesLiveAndToALateJoiner) {
     for (int i = 0; i < kPaths; ++i)
       EXPECT_NEAR(stamps[i], 0.1 * i, 1e-9);
   }
+}
+
+// Every result topic keeps its last samples: a transient-local reader that joins after three
+// keyframes (as one does that discovery let match late) gets the last image_history_depth maps
+// and all three poses, oldest first; a volatile reader, ROS 2's default, matches and gets none.
+TEST_F(DdsResults, LateTransientLocalReaderGetsTheKeptResults) {
+  const Image<Eigen::Vector2f> k(32, 24, Eigen::Vector2f(0.5f, -2.0f));
+  for (int i = 0; i < 3; ++i)
+    publisher_.publish_keyframe(some_pose(1.0 + i), k, {}, Image<float>(32, 24, float(i)));
+  auto poses = reader<RosPoseStamped>(ResultTopic::kKeyframePose);
+  auto sd = reader<RosImage>(ResultTopic::kCurvatureSd);
+  DdsQos volatile_qos = result_topic_qos(config_, ResultTopic::kCurvatureSd);
+  volatile_qos.transient_local = false;
+  DdsReader<RosImage> volatile_sd(
+      subscriber_side_, result_topic_name(config_, ResultTopic::kCurvatureSd), volatile_qos);
+  std::vector<double> pose_stamps;
+  std::vector<float> sd_values;
+  const auto deadline = std::chrono::steady_clock::now() + kTimeout;
+  while ((pose_stamps.size() < 3 || sd_values.size() < 2) &&
+         std::chrono::steady_clock::now() < deadline) {
+    poses.wait(milliseconds(50));
+    poses.take(
+        [&](const RosPoseStamped& m) { pose_stamps.push_back(stamped_pose_of(m).timestamp); });
+    sd.take([&](const RosImage& m) {
+      sd_values.push_back(decode_curvature_sd_image(image_view_of(m), {})[0]);
+    });
+  }
+  ASSERT_EQ(config_.image_history_depth, 2);
+  EXPECT_EQ(pose_stamps, (std::vector<double>{1.0, 2.0, 3.0}));
+  EXPECT_EQ(sd_values, (std::vector<float>{1.0f, 2.0f}));
+  ASSERT_TRUE(test::eventually([&] { return publisher_.matched(ResultTopic::kCurvatureSd) == 2; }));
+  EXPECT_EQ(volatile_sd.take([](const RosImage&) {}), 0u);
+  publisher_.publish_keyframe(some_pose(4.0), k, {}, Image<float>(32, 24, 3.0f));
+  EXPECT_TRUE(take_one(volatile_sd, [](const RosImage& m) { return m.header.stamp.sec; }) == 4);
 }
 
 TEST_F(DdsResults, CurvatureMap640x480ArrivesBitExact) {

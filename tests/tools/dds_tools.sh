@@ -32,10 +32,14 @@ n=$(grep -c "^camera_info .* 640x480 fx=517.300 fy=516.500 cx=318.600 cy=255.300
 echo "ok: 5 depth images and 5 camera_infos received from jpcr_dds_play"
 
 # A best-effort publisher (a ROS sensor-data camera) sends the reliable echo nothing: it says so,
-# with the way out (it printed only "received 0 of 1").
+# with the way out (it printed only "received 0 of 1"). The player's volatile topic sends a
+# --transient-local echo nothing either, for its durability.
 printf 'dds:\n  input_reliability: best_effort\n' > "$tmp/best_effort.yaml"
 "$echo_bin" rt/camera/depth/image_raw --domain $domain --count 1 --timeout 8 > "$tmp/mismatch.txt" 2>&1 &
 echo_mismatch=$!
+"$echo_bin" rt/camera/depth/image_raw --domain $domain --count 1 --timeout 8 --best-effort \
+  --transient-local > "$tmp/durability.txt" 2>&1 &
+echo_durability=$!
 # (about 5 s of frames: the echo meets the publisher while it plays; it matches no subscriber)
 "$play" --params "$tmp/best_effort.yaml" --dataset "$tum" --config "$cam" --frames 0:8 --rate 0.05 \
   --domain $domain --wait-subscribers 0 > "$tmp/best_effort_play.txt" 2>&1
@@ -44,6 +48,12 @@ if [ "$rc" = 1 ] && grep -q "offer a QoS this reader cannot match (reliability: 
   echo "ok: a QoS mismatch is named: $(grep QoS "$tmp/mismatch.txt")"
 else
   echo "FAIL: QoS mismatch: exit $rc"; cat "$tmp/mismatch.txt" "$tmp/best_effort_play.txt"; fail=1
+fi
+wait $echo_durability; rc=$?
+if [ "$rc" = 1 ] && grep -q "offer a QoS this reader cannot match (durability: a volatile publisher keeps nothing for --transient-local)" "$tmp/durability.txt"; then
+  echo "ok: a durability mismatch is named: $(grep QoS "$tmp/durability.txt")"
+else
+  echo "FAIL: durability mismatch: exit $rc"; cat "$tmp/durability.txt" "$tmp/best_effort_play.txt"; fail=1
 fi
 
 # At the recorded rate, SIGINT stops the player between frames with exit 0.

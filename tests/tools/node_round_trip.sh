@@ -52,13 +52,14 @@ PY
 }
 
 # jpcr_run --method j-ftf --dds on the sequence into $1 with --params $2, while jpcr_dds_echo
-# records topic $3 into file $4 (with option $5, or none when it is "") and topic $6 into $7.
+# records topic $3 into file $4 (with option $5, or none when it is "") and topic $6 into $7
+# (transient local: what was written before discovery completed arrives too).
 run_dds_echoing() {
   local out=$1 opts=(--params "$2" --domain $domain) first second
   # shellcheck disable=SC2086  # $5: one option or none
   "$echo_bin" "$3" "${opts[@]}" $5 --timeout 120 > "$4" 2>&1 &
   first=$!; pids+=($first)
-  "$echo_bin" "$6" "${opts[@]}" --timeout 120 > "$7" 2>&1 &
+  "$echo_bin" "$6" "${opts[@]}" --transient-local --timeout 120 > "$7" 2>&1 &
   second=$!; pids+=($second)
   expect 0 "j-ftf " -- "$run" --dataset "$tmp/seq" --method j-ftf --out "$out" --dds "${opts[@]}" \
     --wait-readers 2 --wait-timeout 60
@@ -66,8 +67,9 @@ run_dds_echoing() {
 }
 
 # jpcr_run offline, publishing the same topics (--dds); its path equals its trajectory.txt, and
-# the sd maps it publishes are the ones it writes, all 6 of them: the sd topic is volatile, so
-# jpcr_run waits for the two echoes' readers (--wait-readers 2) before its first sample.
+# the sd maps it publishes are the ones it writes, all 6 of them: jpcr_run waits for the two
+# echoes' readers (--wait-readers 2) before its first sample, and the sd echo, transient local,
+# gets the maps kept for it even if it matched jpcr_run's writer after the first was written.
 run_dds_echoing "$tmp/off" "$tmp/dds.yaml" rt/jpcr/path "$tmp/run_path.txt" --tum \
   rt/jpcr/curvature_sd "$tmp/run_sd.txt"
 same_path "$tmp/run_path.txt" "$tmp/off/trajectory.txt" || { echo "FAIL: jpcr_run --dds path"; cat "$tmp/run_path.txt"; fail=1; }

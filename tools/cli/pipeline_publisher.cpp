@@ -36,8 +36,8 @@ void PipelinePublisher::keyframe_final(const PipelineBackEnd& pipeline, int keyf
                                        const Image<float>& sd) {
   const StampedPose& pose = pipeline.keyframe(static_cast<std::size_t>(keyframe)).refined;
   Image<float> own_sd;
-  // Computed only for a reader (about one Quad IT fit): the topic is volatile, so a reader that
-  // matches later would not receive this map anyway.
+  // Computed only for a reader (about one Quad IT fit): a transient-local reader that matches
+  // later gets only the maps kept from keyframes when a reader was there (README, DDS topics).
   if (publish_sd_ && sd.empty() && spread_ && !quadrics.curvature.empty() &&
       publisher_.matched(ResultTopic::kCurvatureSd) > 0) {
     own_sd = curvature_spread(quadrics, compute_vertex_map(frame.depth, frame.camera), *spread_);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
+#include <cstdint>
 #include <cstring>
 #include <iostream>
 #include <string>
@@ -54,6 +55,15 @@ struct EchoOptions {
   bool curvature_sd = false;  // images: summarised as curvature sd maps
 };
 
+// What a publisher offers that this reader cannot match, in the terms of the options above.
+std::string incompatible_policy(uint32_t id) {
+  if (id == DDS_RELIABILITY_QOS_POLICY_ID)
+    return "reliability: a best-effort publisher needs --best-effort";
+  if (id == DDS_DURABILITY_QOS_POLICY_ID)
+    return "durability: a volatile publisher keeps nothing for --transient-local";
+  return "QoS policy " + std::to_string(id);
+}
+
 template <typename Msg>
 int echo(const DdsParticipant& participant, const EchoOptions& o) {
   const DdsReader<Msg> reader(participant, o.topic, o.qos);
@@ -95,10 +105,7 @@ int echo(const DdsParticipant& participant, const EchoOptions& o) {
       qos.total_count > 0) {
     std::cerr << "jpcr_dds_echo: " << qos.total_count << " publisher(s) on " << o.topic
               << " offer a QoS this reader cannot match ("
-              << (qos.last_policy_id == DDS_RELIABILITY_QOS_POLICY_ID
-                      ? "reliability: a best-effort publisher needs --best-effort"
-                      : "QoS policy " + std::to_string(qos.last_policy_id))
-              << "); their samples do not arrive\n";
+              << incompatible_policy(qos.last_policy_id) << "); their samples do not arrive\n";
   }
   if (o.count > 0 && received < o.count && !cli::stop_requested()) {
     std::cerr << "jpcr_dds_echo: received " << received << " of " << o.count << " samples on "
@@ -123,13 +130,19 @@ int run(int argc, char** argv) {
               "error",
               "0")
       .flag("tum", "with a path: also print its poses as TUM lines (full precision)")
-      .flag("best-effort", "subscribe best effort (matches sensor-data publishers too)");
+      .flag("best-effort", "subscribe best effort (matches sensor-data publishers too)")
+      .flag("transient-local",
+            "subscribe transient local: also get the samples the publisher kept before this\n"
+            "reader matched (jpcr's results: the last history_depth, or image_history_depth\n"
+            "images); matches transient-local publishers only");
   cli::add_dds_options(args);
   args.epilog(
       "Samples are read reliable, keeping dds.history_depth of them, unless --best-effort.\n"
-      "Path is also transient-local (the paths the node keeps arrive on joining: the last one,\n"
-      "or with pipeline.keep_history: false up to history_depth of them); the other types are\n"
-      "volatile.\n\nexample:\n"
+      "Path is always read transient-local (the paths the node keeps arrive on joining: the\n"
+      "last one, or with pipeline.keep_history: false up to history_depth of them); the other\n"
+      "types volatile unless --transient-local. Every jpcr result topic is transient local, so\n"
+      "--transient-local on one loses no sample to discovery, even one written before this\n"
+      "reader was matched.\n\nexample:\n"
       "  jpcr_dds_echo rt/jpcr/odom --count 5 --timeout 10");
   return cli::run_program("jpcr_dds_echo", [&] {
     if (!args.parse(argc, argv)) return 0;
@@ -159,7 +172,7 @@ int run(int argc, char** argv) {
     o.qos.reliable = !args.get_flag("best-effort");
     // Transient local for the last path on joining; history_depth deep for the incremental
     // paths of keep_history: false, each of which carries poses no other path does.
-    if (type == "path") o.qos.transient_local = true;
+    o.qos.transient_local = type == "path" || args.get_flag("transient-local");
     const DdsParticipant participant(dds);
     cli::install_stop_signal_handler();
     if (type == "odom") return echo<RosOdometry>(participant, o);

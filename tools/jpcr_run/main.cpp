@@ -93,8 +93,9 @@ int run_main(int argc, char** argv) {
       .option("cyclone-uri", "Cyclone DDS configuration with --dds, file://PATH or XML")
       .option("wait-readers",
               "with --dds, before the first frame wait until N readers are matched, counted over "
-              "the topics (one per topic each process reads): every topic but path keeps no "
-              "history for late readers (default 0: no wait)")
+              "the topics (one per topic each process reads): a volatile reader matched late "
+              "misses the first samples; a transient-local one gets what each topic keeps "
+              "(default 0: no wait)")
       .option("wait-timeout",
               "seconds --wait-readers waits at most, then the run goes on (default 10)");
 #endif
