@@ -304,13 +304,36 @@ struct JointPixelSystem {
   bool active = false;   // takes part in this iteration
 };
 
+/// The Schur factors of sys for the damping λ (LM on the full system: C_p + λ diag C_p): L, then
+/// k = C_p⁻¹ b_p (from sys.g_gamma = −b_p) and K_j = C_p⁻¹ B_jpᵀ for each frame that sees the
+/// quadric. C is the undamped C_p. False when the damped C_p is not positive definite.
+template <typename Scalar, int MaxFrames>
+JPCR_HD bool factor_damped_quadric(const Eigen::Matrix<Scalar, 6, 6>& C, Scalar lambda, int frames,
+                                   JointPixelSystem<Scalar, MaxFrames>& sys) {
+  sys.L = C;
+  for (int i = 0; i < 6; ++i)
+    sys.L(i, i) *= Scalar(1) + lambda;
+  if (!cholesky_factor<Scalar, 6>(sys.L, Scalar(0))) return false;
+  sys.k = -sys.g_gamma;
+  cholesky_solve<Scalar, 6>(sys.L, sys.k);
+  for (int j = 0; j + 1 < frames && j < sys.kPoses; ++j) {
+    if (!sys.seen[j]) continue;
+    sys.K[j] = sys.B[j].transpose();  // K_j = C⁻¹ B_jᵀ
+    cholesky_solve_columns<Scalar, 6, 6>(sys.L, sys.K[j]);
+  }
+  return true;
+}
+
 /// Builds the system of the quadric at reference pixel (u, v) (method.md §6/§7) with the
 /// Levenberg damping λ on the diagonal of C_p. Inactive when the frame-1 terms are too few, no
-/// other frame sees it, or C_p is ill-conditioned; an inactive quadric keeps its γ_p.
+/// other frame sees it, or C_p is ill-conditioned; an inactive quadric keeps its γ_p. With
+/// `undamped_C`, an active quadric's C_p without the damping goes there too (the CPU J-ftf keeps
+/// it, to apply another damping without new sums: JointSystem::redamp).
 template <typename Scalar, int MaxFrames, typename Sampler>
 JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowView<Scalar>& w,
                                    int u, int v, const JointTermParams& p, Scalar lambda,
-                                   Sampler& sampler, JointPixelSystem<Scalar, MaxFrames>& sys) {
+                                   Sampler& sampler, JointPixelSystem<Scalar, MaxFrames>& sys,
+                                   Eigen::Matrix<Scalar, 6, 6>* undamped_C = nullptr) {
   using Matrix6 = Eigen::Matrix<Scalar, 6, 6>;
   const SampleGate<Scalar> limits = SampleGate<Scalar>::at(p.fit, q.center);
   sys.active = false;
@@ -356,18 +379,8 @@ JPCR_HD void linearize_joint_pixel(const QuadricT<Scalar>& q, const JointWindowV
     if (!cholesky_factor<Scalar, 6>(sys.L, Scalar(0))) return;
     for (int i = 0; i < 6; ++i)
       if (!(sys.L(i, i) * sys.L(i, i) >= Scalar(p.min_pivot_ratio) * C(i, i))) return;
-    // LM on the full system: C_p + λ diag C_p.
-    sys.L = C;
-    for (int i = 0; i < 6; ++i)
-      sys.L(i, i) *= Scalar(1) + lambda;
-    if (!cholesky_factor<Scalar, 6>(sys.L, Scalar(0))) return;
-    sys.k = -sys.g_gamma;
-    cholesky_solve<Scalar, 6>(sys.L, sys.k);
-    for (int j = 0; j + 1 < w.frames && j < sys.kPoses; ++j) {
-      if (!sys.seen[j]) continue;
-      sys.K[j] = sys.B[j].transpose();  // K_j = C⁻¹ B_jᵀ
-      cholesky_solve_columns<Scalar, 6, 6>(sys.L, sys.K[j]);
-    }
+    if (!factor_damped_quadric(C, lambda, w.frames, sys)) return;
+    if (undamped_C) *undamped_C = C;
   }
   sys.active = true;
 }
@@ -391,12 +404,12 @@ JPCR_HD unsigned seen_bits(const JointPixelSystem<Scalar, MaxFrames>& sys, int f
   return bits;
 }
 
-/// Adds an active quadric's share to the reduced system (lower triangle of the dense
-/// n x n matrix S, n = 6 (M − 1), row-major, and s), and diag A to A_diagonal:
-///   S_jk += δ_jk A_jp − B_jp K_k,   s_j += −g_xi_j − B_jp k.
+/// Adds an active quadric's pose terms to the reduced system (lower triangle of the dense
+/// n x n matrix S, n = 6 (M − 1), row-major, and s), and diag A to A_diagonal (unless null):
+///   S_jj += A_jp,   s_j += −g_xi_j.
 template <typename Scalar, int MaxFrames, typename Acc>
-JPCR_HD void add_schur_terms(const JointPixelSystem<Scalar, MaxFrames>& sys, int frames,
-                             bool estimate_quadrics, Acc* S, Acc* s, Acc* A_diagonal) {
+JPCR_HD void add_pose_terms(const JointPixelSystem<Scalar, MaxFrames>& sys, int frames, Acc* S,
+                            Acc* s, Acc* A_diagonal) {
   const int n = 6 * (frames - 1);
   for (int j = 0; j + 1 < frames && j < sys.kPoses; ++j) {
     if (!sys.seen[j]) continue;
@@ -404,12 +417,22 @@ JPCR_HD void add_schur_terms(const JointPixelSystem<Scalar, MaxFrames>& sys, int
       const int row = 6 * j + r;
       for (int c = 0; c <= r; ++c)
         S[row * n + 6 * j + c] += Acc(sys.A[j](r, c));
-      A_diagonal[row] += Acc(sys.A[j](r, r));
-      Scalar sr = -sys.g_xi[j](r);
-      if (estimate_quadrics) sr -= sys.B[j].row(r).dot(sys.k);
-      s[row] += Acc(sr);
+      if (A_diagonal) A_diagonal[row] += Acc(sys.A[j](r, r));
+      s[row] += Acc(-sys.g_xi[j](r));
     }
-    if (!estimate_quadrics) continue;
+  }
+}
+
+/// Eliminates the quadric from the reduced system (its factors k, K_j; the same layout):
+///   S_jk −= B_jp K_k,   s_j −= B_jp k.
+template <typename Scalar, int MaxFrames, typename Acc>
+JPCR_HD void eliminate_quadric(const JointPixelSystem<Scalar, MaxFrames>& sys, int frames, Acc* S,
+                               Acc* s) {
+  const int n = 6 * (frames - 1);
+  for (int j = 0; j + 1 < frames && j < sys.kPoses; ++j) {
+    if (!sys.seen[j]) continue;
+    for (int r = 0; r < 6; ++r)
+      s[6 * j + r] -= Acc(sys.B[j].row(r).dot(sys.k));
     for (int k = 0; k <= j; ++k) {
       if (!sys.seen[k]) continue;
       const Eigen::Matrix<Scalar, 6, 6> BK = sys.B[j] * sys.K[k];  // B_jp C_p⁻¹ B_kpᵀ
@@ -418,6 +441,15 @@ JPCR_HD void add_schur_terms(const JointPixelSystem<Scalar, MaxFrames>& sys, int
           S[(6 * j + r) * n + 6 * k + c] -= Acc(BK(r, c));
     }
   }
+}
+
+/// An active quadric's share of the reduced system: its pose terms, and with estimate_quadrics
+/// its elimination, S_jk += δ_jk A_jp − B_jp K_k and s_j += −g_xi_j − B_jp k.
+template <typename Scalar, int MaxFrames, typename Acc>
+JPCR_HD void add_schur_terms(const JointPixelSystem<Scalar, MaxFrames>& sys, int frames,
+                             bool estimate_quadrics, Acc* S, Acc* s, Acc* A_diagonal) {
+  add_pose_terms(sys, frames, S, s, A_diagonal);
+  if (estimate_quadrics) eliminate_quadric(sys, frames, S, s);
 }
 
 /// Back-substitution (method.md §7): Δγ_p = C_p⁻¹ (b_p − Σ_j B_jpᵀ Δξ_j) = k − Σ_j K_j Δξ_j.

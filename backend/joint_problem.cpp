@@ -213,10 +213,10 @@ RefinementResult run_joint_refinement(JointProblem& problem, const JointParams& 
       report.verdict = RefinementVerdict::kDiverged;
       break;
     }
-    problem.relinearize(lambda, lin);
+    problem.redamp(lambda, lin);  // the state is unchanged: only the damping
   }
   report.damping = lambda;
-  problem.relinearize(0.0, lin);
+  problem.redamp(0.0, lin);  // `lin` is the current state's: after every accept it is relinearised
   finish_report(lin, estimate_quadrics, out);
   const bool settled = report.verdict == RefinementVerdict::kConverged ||
                        report.verdict == RefinementVerdict::kMaxIterations;

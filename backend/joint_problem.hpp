@@ -26,9 +26,14 @@ class JointProblem {
   /// may reuse.
   virtual void relinearize(double lambda, ReducedSystem& out) { out = linearize(lambda); }
 
-  /// Back-substitutes the quadric steps for `pose_steps` (solved from `system`, which is the
-  /// most recent linearize(λ)) into a candidate state and returns Σ w r² there, re-associated
-  /// at the candidate poses.
+  /// linearize(λ) into `out` when `out` is the system of the current state at another damping,
+  /// unchanged since (after a rejected step, and for the final undamped system): an
+  /// implementation may then only apply the new damping. By default relinearize.
+  virtual void redamp(double lambda, ReducedSystem& out) { relinearize(lambda, out); }
+
+  /// Back-substitutes the quadric steps for `pose_steps` (solved from `system`, the most recent
+  /// linearize, relinearize or redamp at this λ) into a candidate state and returns Σ w r²
+  /// there, re-associated at the candidate poses.
   virtual double propose(const ReducedSystem& system, double lambda,
                          const std::vector<Vector6d>& pose_steps) = 0;
 
@@ -47,6 +52,10 @@ class CpuJointProblem final : public JointProblem {
   ReducedSystem linearize(double lambda) override { return system_.linearize(state_, lambda); }
   void relinearize(double lambda, ReducedSystem& out) override {
     system_.linearize(state_, lambda, out);
+  }
+  /// JointSystem::redamp (J-ftf: no new sums; Q-full: nothing to do), else linearize again.
+  void redamp(double lambda, ReducedSystem& out) override {
+    if (!system_.redamp(lambda, out)) system_.linearize(state_, lambda, out);
   }
   double propose(const ReducedSystem& system, double lambda,
                  const std::vector<Vector6d>& pose_steps) override {

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <iomanip>
+#include <limits>
 #include <optional>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -27,18 +30,30 @@ std::vector<RigidMotion<double>> motions_of(const std::vector<Eigen::Isometry3d>
 }
 
 // One thread's share of the reduced system, merged into the total at the end (double). Its
-// factors and active pixels are one row's, moved into the output after each row (append_rows).
+// blocks and active pixels are one row's, moved into the output after each row (append_rows).
+// A_sum and a_sum: the same sums before elimination (J-ftf's kept blocks).
 struct ReductionShare {
   explicit ReductionShare(int n, int poses)
-      : S(static_cast<std::size_t>(n) * n, 0.0), s(n, 0.0), A_diagonal(n, 0.0), seen(poses, 0) {}
-  std::vector<double> S, s, A_diagonal;
+      : S(static_cast<std::size_t>(n) * n, 0.0),
+        s(n, 0.0),
+        A_diagonal(n, 0.0),
+        A_sum(S),
+        a_sum(s),
+        seen(poses, 0) {}
+  std::vector<double> S, s, A_diagonal, A_sum, a_sum;
   std::vector<int> seen;
-  std::vector<PairFactors> factors;
+  std::vector<PairBlocks> blocks;
   std::vector<FixedPixel> fixed_active;
   double cost = 0.0;
   long terms = 0;
   int active = 0;
 };
+
+// S (n x n, its lower triangle in the row-major `lower`) as a full symmetric matrix: as a
+// column-major map, `lower` is the upper triangle of S.
+Eigen::MatrixXd symmetric_of(const std::vector<double>& lower, int n) {
+  return Eigen::Map<const Eigen::MatrixXd>(lower.data(), n, n).selfadjointView<Eigen::Upper>();
+}
 
 // Moves a thread's row of entries to the next free place of `all` (sized for every valid pixel
 // beforehand) and empties it: no thread's buffer grows past a row, and `all` keeps its capacity
@@ -55,18 +70,47 @@ void append_rows(std::vector<T>& row, std::vector<T>& all, std::atomic<std::size
 // number of valid quadrics per row varies.
 constexpr int kRowChunk = 4;
 
+// The lower triangle of a 6x6 matrix, column by column, and back (the upper triangle zero:
+// cholesky_factor and cholesky_solve read only the lower one).
+void pack_lower(const Matrix6d& m, std::array<double, 21>& out) {
+  int k = 0;
+  for (int c = 0; c < 6; ++c)
+    for (int r = c; r < 6; ++r)
+      out[static_cast<std::size_t>(k++)] = m(r, c);
+}
+Matrix6d unpack_lower(const std::array<double, 21>& packed) {
+  Matrix6d m = Matrix6d::Zero();
+  int k = 0;
+  for (int c = 0; c < 6; ++c)
+    for (int r = c; r < 6; ++r)
+      m(r, c) = packed[static_cast<std::size_t>(k++)];
+  return m;
+}
+
+// Keeps an active pair quadric's blocks: its undamped C_p, the damped factor sys.L, B, −b.
+void keep_blocks_of(std::size_t pixel, const Matrix6d& C, const JointPixelSystem<double, 2>& sys,
+                    PairBlocks& b) {
+  b.pixel = pixel;
+  pack_lower(C, b.C);
+  pack_lower(sys.L, b.L);
+  b.B = sys.B[0];
+  b.g_gamma = sys.g_gamma;
+}
+
 // Row v of the reference frame: each active quadric's share of the reduced system; with
-// keep_factors (M = 2) also its back-substitution factors.
+// keep_blocks (M = 2) also its blocks and its pose terms on their own.
 template <int MaxFrames, typename Sampler>
 void linearize_row(const JointState& state, const JointWindowView<double>& window,
-                   const JointTermParams& p, double lambda, int v, int width, bool keep_factors,
+                   const JointTermParams& p, double lambda, int v, int width, bool keep_blocks,
                    Sampler& sampler, ReductionShare& share) {
   JointPixelSystem<double, MaxFrames> sys;
+  Matrix6d C;
   const int M = window.frames;
   for (int u = 0; u < width; ++u) {
     const std::size_t i = static_cast<std::size_t>(v) * width + u;
     if (!state.valid[i]) continue;
-    linearize_joint_pixel(state.quadrics[i], window, u, v, p, lambda, sampler, sys);
+    linearize_joint_pixel(state.quadrics[i], window, u, v, p, lambda, sampler, sys,
+                          keep_blocks ? &C : nullptr);
     if (!sys.active) continue;
     add_schur_terms(sys, M, p.estimate_quadrics, share.S.data(), share.s.data(),
                     share.A_diagonal.data());
@@ -75,7 +119,13 @@ void linearize_row(const JointState& state, const JointWindowView<double>& windo
     ++share.active;
     for (int j = 0; j + 1 < M; ++j)
       share.seen[j] += sys.seen[j] ? 1 : 0;
-    if (keep_factors) share.factors.push_back(PairFactors{i, sys.k, sys.K[0]});
+    if constexpr (MaxFrames == 2) {
+      if (keep_blocks) {
+        add_pose_terms(sys, M, share.A_sum.data(), share.a_sum.data(),
+                       static_cast<double*>(nullptr));
+        keep_blocks_of(i, C, sys, share.blocks.emplace_back());
+      }
+    }
     if (!p.estimate_quadrics) share.fixed_active.push_back(FixedPixel{i, seen_bits(sys, M)});
   }
 }
@@ -104,18 +154,21 @@ double step_row(const JointState& state, const JointWindowView<double>& window,
   return cost;
 }
 
-// J-ftf's step from the kept factors: Δγ_p = k − K Δξ, then the candidate's cost (frame 2 sees
-// every active quadric of a pair).
+// J-ftf's step from the kept blocks, Δγ_p = (C_p + λ diag C_p)⁻¹ (b_p − B_pᵀ Δξ) with their
+// factor (method.md §6: k − K Δξ, one right-hand side instead of K's six), then the candidate's
+// cost (frame 2 sees every active quadric of a pair).
 template <typename Sampler>
-double step_factors(const PairFactors& f, const JointState& state,
-                    const JointWindowView<double>& window, const JointWindowView<double>& next,
-                    const JointTermParams& p, const Vector6d& pose_step, int width,
-                    Sampler& sampler, JointStep& out) {
-  Quadricd& q = out.candidate.quadrics[f.pixel];
-  out.quadric_steps[f.pixel] = f.k - f.K * pose_step;
-  apply_quadric_update(q, out.quadric_steps[f.pixel]);
-  const int u = static_cast<int>(f.pixel % width), v = static_cast<int>(f.pixel / width);
-  return linearized_pixel_cost(q, state.quadrics[f.pixel], window, next, u, v, 1u, p, sampler);
+double step_blocks(const PairBlocks& b, const JointState& state,
+                   const JointWindowView<double>& window, const JointWindowView<double>& next,
+                   const JointTermParams& p, const Vector6d& pose_step, int width, Sampler& sampler,
+                   JointStep& out) {
+  QuadricVector<double> delta = -b.g_gamma - b.B.transpose() * pose_step;
+  cholesky_solve<double, 6>(unpack_lower(b.L), delta);
+  Quadricd& q = out.candidate.quadrics[b.pixel];
+  out.quadric_steps[b.pixel] = delta;
+  apply_quadric_update(q, out.quadric_steps[b.pixel]);
+  const int u = static_cast<int>(b.pixel % width), v = static_cast<int>(b.pixel / width);
+  return linearized_pixel_cost(q, state.quadrics[b.pixel], window, next, u, v, 1u, p, sampler);
 }
 
 // The sums per frame: gathered and vectorised across samples (the default), or sample by sample
@@ -170,12 +223,12 @@ void JointSystem::linearize(const JointState& state, double lambda, ReducedSyste
   const int M = frames(), n = 6 * (M - 1);
   const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
   const JointWindowView<double> window = window_view(motions);
-  const bool keep_factors = M == 2 && params_.estimate_quadrics;
+  const bool keep_blocks = M == 2 && params_.estimate_quadrics;
   const auto valid = static_cast<std::size_t>(
       std::count(state.valid.begin(), state.valid.end(), static_cast<unsigned char>(1)));
-  out.factors.resize(keep_factors ? valid : 0);
+  out.blocks.resize(keep_blocks ? valid : 0);
   out.fixed_active.resize(params_.estimate_quadrics ? 0 : valid);
-  std::atomic<std::size_t> factors_end{0}, fixed_end{0};
+  std::atomic<std::size_t> blocks_end{0}, fixed_end{0};
   ReductionShare total(n, M - 1);
   ParallelGuard guard;  // e.g. a worker's buffers out of memory: rethrown, not std::terminate
 #pragma omp parallel
@@ -188,12 +241,12 @@ void JointSystem::linearize(const JointState& state, double lambda, ReducedSyste
         if (guard.failed() || !sampler || !share) continue;
         try {  // not guard.run's lambda: clang cannot nest it here (parallel_guard.hpp)
           if (M == 2)
-            linearize_row<2>(state, window, params_, lambda, v, width_, keep_factors, *sampler,
+            linearize_row<2>(state, window, params_, lambda, v, width_, keep_blocks, *sampler,
                              *share);
           else
             linearize_row<kMaxWindowFrames>(state, window, params_, lambda, v, width_, false,
                                             *sampler, *share);
-          append_rows(share->factors, out.factors, factors_end);
+          append_rows(share->blocks, out.blocks, blocks_end);
           append_rows(share->fixed_active, out.fixed_active, fixed_end);
         } catch (...) {
           guard.record_current();
@@ -202,10 +255,13 @@ void JointSystem::linearize(const JointState& state, double lambda, ReducedSyste
     });
 #pragma omp critical(jpcr_joint_reduce)
     if (share) {
-      for (std::size_t k = 0; k < total.S.size(); ++k)
+      for (std::size_t k = 0; k < total.S.size(); ++k) {
         total.S[k] += share->S[k];
+        total.A_sum[k] += share->A_sum[k];
+      }
       for (int k = 0; k < n; ++k) {
         total.s[k] += share->s[k];
+        total.a_sum[k] += share->a_sum[k];
         total.A_diagonal[k] += share->A_diagonal[k];
       }
       for (int j = 0; j + 1 < M; ++j)
@@ -216,17 +272,84 @@ void JointSystem::linearize(const JointState& state, double lambda, ReducedSyste
     }
   }
   guard.rethrow();
-  out.factors.resize(factors_end);
+  out.blocks.resize(blocks_end);
   out.fixed_active.resize(fixed_end);
-  // total.S is row-major with its lower triangle filled: as a column-major map that is the upper
-  // triangle of S.
-  out.S = Eigen::Map<const Eigen::MatrixXd>(total.S.data(), n, n).selfadjointView<Eigen::Upper>();
+  out.S = symmetric_of(total.S, n);
   out.s = Eigen::Map<const Eigen::VectorXd>(total.s.data(), n);
+  if (keep_blocks) {
+    out.A_sum = symmetric_of(total.A_sum, n);
+    out.a_sum = Eigen::Map<const Eigen::VectorXd>(total.a_sum.data(), n);
+  } else {
+    out.A_sum.resize(0, 0);
+    out.a_sum.resize(0);
+  }
   out.A_diagonal = Eigen::Map<const Eigen::VectorXd>(total.A_diagonal.data(), n);
+  out.damping = lambda;
   out.cost = total.cost;
   out.terms = total.terms;
   out.active = total.active;
   out.seen = std::move(total.seen);
+}
+
+bool JointSystem::redamp(double lambda, ReducedSystem& system) const {
+  // A system of this JointSystem's size (not another window's left in the buffers).
+  const int poses = frames() - 1, n = 6 * poses;
+  if (system.S.rows() != n || system.s.size() != n ||
+      system.seen.size() != static_cast<std::size_t>(poses))
+    return false;
+  if (!params_.estimate_quadrics) {  // Q-full: λ enters only solve_poses
+    system.damping = lambda;
+    return true;
+  }
+  if (poses != 1 || system.A_sum.rows() != n || system.a_sum.size() != n) return false;
+  // Until the new factors are all in place: a step on a half-redamped system throws (step_pair).
+  system.damping = std::numeric_limits<double>::quiet_NaN();
+  std::vector<double> S(n * n, 0.0), s(n, 0.0);
+  for (int r = 0; r < n; ++r) {
+    s[r] = system.a_sum(r);
+    for (int c = 0; c <= r; ++c)
+      S[r * n + c] = system.A_sum(r, c);
+  }
+  const long count = static_cast<long>(system.blocks.size());
+  ParallelGuard guard;  // e.g. a worker's share out of memory: rethrown, not std::terminate
+#pragma omp parallel
+  {
+    std::vector<double> share_S, share_s;
+    guard.run([&] {
+      share_S.assign(n * n, 0.0);
+      share_s.assign(n, 0.0);
+    });
+    JointPixelSystem<double, 2> sys;
+    sys.seen[0] = true;
+#pragma omp for schedule(static) nowait
+    for (long k = 0; k < count; ++k) {
+      if (guard.failed() || share_S.empty()) continue;
+      try {
+        PairBlocks& b = system.blocks[static_cast<std::size_t>(k)];
+        sys.B[0] = b.B;
+        sys.g_gamma = b.g_gamma;
+        // Not after linearize: its undamped C_p passed the pivot test there.
+        if (!factor_damped_quadric(unpack_lower(b.C), lambda, 2, sys))
+          throw std::logic_error("J-ftf: a kept quadric's damped C_p is not positive definite");
+        eliminate_quadric(sys, 2, share_S.data(), share_s.data());
+        pack_lower(sys.L, b.L);
+      } catch (...) {
+        guard.record_current();
+      }
+    }
+#pragma omp critical(jpcr_joint_redamp)
+    if (!share_S.empty()) {
+      for (int k = 0; k < n * n; ++k)
+        S[k] += share_S[k];
+      for (int k = 0; k < n; ++k)
+        s[k] += share_s[k];
+    }
+  }
+  guard.rethrow();
+  system.S = symmetric_of(S, n);
+  system.s = Eigen::Map<const Eigen::VectorXd>(s.data(), n);
+  system.damping = lambda;
+  return true;
 }
 
 void JointSystem::start_step(const JointState& state, const std::vector<Vector6d>& pose_steps,
@@ -247,10 +370,16 @@ JointWindowView<double> JointSystem::window_view(
           camera_,       pattern_.data(), static_cast<int>(pattern_.size())};
 }
 
-void JointSystem::step_pair(const JointState& state, const ReducedSystem& system,
+void JointSystem::step_pair(const JointState& state, const ReducedSystem& system, double lambda,
                             const JointWindowView<double>& window,
                             const JointWindowView<double>& next, JointStep& out) const {
-  const long count = static_cast<long>(system.factors.size());
+  if (lambda != system.damping) {  // also NaN: a redamp that did not finish
+    std::ostringstream message;
+    message << std::setprecision(17) << "JointSystem::step: damping " << lambda << ", the system's "
+            << system.damping;
+    throw std::invalid_argument(message.str());
+  }
+  const long count = static_cast<long>(system.blocks.size());
   double cost = 0.0;
   ParallelGuard guard;  // e.g. a worker's buffers out of memory: rethrown, not std::terminate
 #pragma omp parallel reduction(+ : cost)
@@ -259,8 +388,8 @@ void JointSystem::step_pair(const JointState& state, const ReducedSystem& system
     for (long k = 0; k < count; ++k) {
       if (guard.failed() || !sampler) continue;
       try {
-        cost += step_factors(system.factors[static_cast<std::size_t>(k)], state, window, next,
-                             params_, out.pose_steps[0], width_, *sampler, out);
+        cost += step_blocks(system.blocks[static_cast<std::size_t>(k)], state, window, next,
+                            params_, out.pose_steps[0], width_, *sampler, out);
       } catch (...) {
         guard.record_current();
       }
@@ -330,12 +459,12 @@ void JointSystem::step(const JointState& state, const ReducedSystem& system, dou
   const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
   const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
   const JointWindowView<double> window = window_view(motions), next = window_view(moved);
-  // J-ftf keeps its factors, Q-full has no quadric step (only the candidate's cost), J-full
+  // J-ftf keeps its blocks, Q-full has no quadric step (only the candidate's cost), J-full
   // recomputes each quadric's system.
   if (!params_.estimate_quadrics)
     step_fixed(state, system, window, next, out);
   else if (frames() == 2)
-    step_pair(state, system, window, next, out);
+    step_pair(state, system, lambda, window, next, out);
   else
     step_window(state, lambda, window, next, out);
 }

@@ -4,6 +4,7 @@
 // Levenberg-Marquardt loop around it is in joint_window.cpp.
 #pragma once
 
+#include <array>
 #include <vector>
 
 #include <Eigen/Core>
@@ -24,9 +25,6 @@ struct JointState {
   std::vector<unsigned char> valid;  // 1 where the pixel has a quadric
 };
 
-/// What the back-substitution of J-ftf needs of one active quadric, kept from its linearisation:
-/// Δγ_p = k − K Δξ (42 numbers). Only for M = 2; larger windows would keep (M − 1)·36 + 6 numbers
-/// per quadric (over 1 kB at M = 5) and recompute the system instead.
 /// Q-full: an active quadric and the frames that see it (bit j − 1 for frame j).
 struct FixedPixel {
   std::size_t pixel = 0;  // row-major index in the reference frame
@@ -35,10 +33,25 @@ struct FixedPixel {
   bool operator==(const FixedPixel& o) const { return pixel == o.pixel && seen == o.seen; }
 };
 
+/// What the back-substitution of J-ftf needs of one active quadric for one damping:
+/// Δγ_p = k − K Δξ (42 numbers; the GPU J-ftf keeps these, CudaJointSystem::factors).
 struct PairFactors {
   std::size_t pixel = 0;    // row-major index in the reference frame
   QuadricVector<double> k;  // C_p⁻¹ b_p
   Matrix6d K;               // C_p⁻¹ B_pᵀ
+};
+
+/// What the CPU J-ftf keeps of one active quadric's linearisation (84 numbers): the undamped
+/// C_p, B_p and −b_p, from which another damping λ needs no new sums (JointSystem::redamp), and
+/// the Cholesky factor of C_p + λ diag C_p at the system's damping, for the back-substitution
+/// Δγ_p = (C_p + λ diag C_p)⁻¹ (b_p − B_pᵀ Δξ). Only for M = 2; larger windows would keep
+/// (M − 1)·36 + 48 numbers per quadric (1.5 kB at M = 5) and recompute the system instead.
+struct PairBlocks {
+  std::size_t pixel = 0;          // row-major index in the reference frame
+  std::array<double, 21> C;       // the lower triangle of the undamped C_p, column by column
+  std::array<double, 21> L;       // the lower triangle of the damped C_p's Cholesky factor
+  Matrix6d B;                     // B_p
+  QuadricVector<double> g_gamma;  // −b_p
 };
 
 /// S = A − Σ_p B_p C_p⁻¹ B_pᵀ and s = a − Σ_p B_p C_p⁻¹ b_p (n = 6 (M − 1)), with the damping λ
@@ -51,8 +64,13 @@ struct ReducedSystem {
   long terms = 0;                        // their terms inside the gate
   int active = 0;                        // quadrics taking part
   std::vector<int> seen;                 // per pose T_2 … T_M: active quadrics that frame sees
-  std::vector<PairFactors> factors;      // M = 2: every active quadric's back-substitution factors
   std::vector<FixedPixel> fixed_active;  // Q-full: the active quadrics and their frames
+  double damping = 0.0;                  // λ in the C_p of S (and of the blocks' factors)
+  // The CPU J-ftf (M = 2): every active quadric's blocks, and S and s before any quadric is
+  // eliminated (Σ_p A_p and a = −Σ_p g_ξp): what redamp needs.
+  std::vector<PairBlocks> blocks;
+  Eigen::MatrixXd A_sum;
+  Eigen::VectorXd a_sum;
 };
 
 /// A proposed step and where it leads.
@@ -84,8 +102,16 @@ class JointSystem {
   /// The reduced system at `state`, with the Levenberg damping λ on C_p.
   ReducedSystem linearize(const JointState& state, double lambda) const;
   /// The same into `out`, reusing its buffers: a refinement loop keeps one ReducedSystem, as
-  /// J-ftf's factors at 640x480 are about 90 MB, on fresh pages each iteration otherwise.
+  /// J-ftf's blocks at 640x480 are about 200 MB, on fresh pages each iteration otherwise.
   void linearize(const JointState& state, double lambda, ReducedSystem& out) const;
+
+  /// Turns `system`, a linearize(state, λ₀) of this JointSystem, into linearize(state, λ) (to
+  /// rounding) without new sums: the damping is all that changes after a rejected step. J-ftf
+  /// eliminates its kept blocks again (no gathering); Q-full's system does not depend on λ.
+  /// False, and `system` unchanged, where it cannot (J-full keeps no blocks, or `system` is of
+  /// another size): then linearize again. After an exception (a worker out of memory) `system`
+  /// is to be linearised again; a step on it throws until then.
+  bool redamp(double lambda, ReducedSystem& system) const;
 
   /// Solves (S + λ diag A) Δξ = s with LDLT; false when it is not positive definite or the step
   /// is not finite.
@@ -94,8 +120,9 @@ class JointSystem {
 
   /// Back-substitutes Δγ_p for the poses' step and evaluates the cost of the candidate over the
   /// linearisation's terms (each frame's pattern where it was associated at `state`). `system` and
-  /// λ are those of linearize(state, λ): J-ftf uses the factors kept in `system`, larger windows
-  /// recompute each quadric's system.
+  /// λ are those of linearize(state, λ) (or redamp): J-ftf uses the blocks kept in `system`,
+  /// larger windows recompute each quadric's system. Throws std::invalid_argument when J-ftf's λ
+  /// is not the system's damping.
   JointStep step(const JointState& state, const ReducedSystem& system, double lambda,
                  const std::vector<Vector6d>& pose_steps) const;
   /// The same into `out`, reusing its buffers (the candidate state and the quadric steps).
@@ -106,7 +133,7 @@ class JointSystem {
   /// The window seen from `motions` (one per frame, T_j as RigidMotion).
   JointWindowView<double> window_view(const std::vector<RigidMotion<double>>& motions) const;
   // Each costs the candidate: `window` at the linearisation's poses, `next` at the candidate's.
-  void step_pair(const JointState& state, const ReducedSystem& system,
+  void step_pair(const JointState& state, const ReducedSystem& system, double lambda,
                  const JointWindowView<double>& window, const JointWindowView<double>& next,
                  JointStep& out) const;
   void step_fixed(const JointState& state, const ReducedSystem& system,

@@ -403,8 +403,16 @@ TEST(FixedQuadricStep, EqualsTheDenseSolveOfThePoseBlockAndKeepsTheQuadrics) {
   }
 }
 
+// The first M frames' true poses, each after the first 1 cm / 1° off (test::perturbed).
+std::vector<Eigen::Isometry3d> perturbed_poses(const JointTestWindow& w, int M) {
+  std::vector<Eigen::Isometry3d> poses{w.truth[0]};
+  for (int j = 1; j < M; ++j)
+    poses.push_back(perturbed(w.truth[j], 0.01, 1.0, j));
+  return poses;
+}
+
 // linearize / step into buffers that hold an earlier, larger system (another state, J-ftf's
-// factors) give what fresh ones give: the factors and active pixels are those of this state only,
+// blocks) give what fresh ones give: the blocks and active pixels are those of this state only,
 // and the candidate is this state's. J-ftf, Q-full and J-full (M = 2, 2, 3).
 JointState quadric_state(const QuadricMap& map, const std::vector<Eigen::Isometry3d>& poses,
                          int every) {
@@ -536,6 +544,65 @@ TEST(JointSystem, AVertexWithANonFiniteCoordinateIsNoSample) {
   EXPECT_NEAR(lin[0].cost, lin[1].cost, 1e-4 * lin[1].cost);
 }
 
+// After a rejected step only the damping changes. redamp gives J-ftf's system at the new λ from
+// its kept blocks, and its step, as linearising again does (to the rounding of the threads' sums
+// and of S taken as Σ A − Σ B K instead of Σ (A − B K)); Q-full's system does not depend on λ;
+// J-full keeps no blocks and is left as it was.
+TEST(JointSystem, RedampGivesTheSystemLinearizedAtTheNewDamping) {
+  const JointTestWindow w = render_window(3, 160, "range:1");
+  const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
+  const NeighbourhoodPattern pattern = QuadricParams{}.pattern.for_width(w.camera.width);
+  for (const auto& [M, estimate_quadrics] : {std::pair{2, true}, {2, false}, {3, true}}) {
+    SCOPED_TRACE("M = " + std::to_string(M) + (estimate_quadrics ? "" : ", Q-full"));
+    const std::vector<VertexMap> frames(w.vertices.begin(), w.vertices.begin() + M);
+    const std::vector<Eigen::Isometry3d> poses = perturbed_poses(w, M);
+    const JointState state = quadric_state(map, poses, 1);
+    const JointSystem system(frames, w.camera, pattern, JointParams{}.terms(estimate_quadrics));
+    for (const double lambda : {0.0, 1e-2, 10.0}) {
+      SCOPED_TRACE("lambda " + std::to_string(lambda));
+      ReducedSystem redamped = system.linearize(state, 1e-4);
+      const Eigen::MatrixXd S_before = redamped.S;
+      const bool done = system.redamp(lambda, redamped);
+      EXPECT_EQ(done, M == 2);
+      if (!done) {
+        EXPECT_EQ(redamped.S, S_before);
+        continue;
+      }
+      const ReducedSystem fresh = system.linearize(state, lambda);
+      ASSERT_GT(fresh.active, 100);
+      EXPECT_EQ(redamped.active, fresh.active);
+      EXPECT_EQ(redamped.terms, fresh.terms);
+      EXPECT_EQ(redamped.seen, fresh.seen);
+      EXPECT_NEAR(redamped.cost, fresh.cost, 1e-12 * fresh.cost);
+      EXPECT_LT((redamped.A_diagonal - fresh.A_diagonal).norm(), 1e-12 * fresh.A_diagonal.norm());
+      const double dS = (redamped.S - fresh.S).norm() / fresh.S.norm();
+      const double ds = (redamped.s - fresh.s).norm() / fresh.s.norm();
+      std::printf("M = %d%s, lambda %g: S %.2g, s %.2g relative\n", M,
+                  estimate_quadrics ? "" : " (Q-full)", lambda, dS, ds);
+      EXPECT_LT(dS, 1e-12);  // ΣA − ΣBK against Σ(A − BK), other thread orders: 4e-15 measured
+      EXPECT_LT(ds, 1e-12);
+      if (estimate_quadrics && lambda > 0.0) {  // the damping moved S by far more than that
+        EXPECT_GT((S_before - fresh.S).norm(), 1e-6 * fresh.S.norm());
+      }
+      std::vector<Vector6d> steps;
+      ASSERT_TRUE(JointSystem::solve_poses(fresh, lambda, steps));
+      const JointStep a = system.step(state, redamped, lambda, steps);
+      const JointStep b = system.step(state, fresh, lambda, steps);
+      EXPECT_NEAR(a.cost, b.cost, 1e-12 * b.cost);
+      // The same blocks and the same factor (cholesky_factor reads the lower triangle, which
+      // both keep to the bit): the same quadric steps to the bit.
+      double largest = 0.0;
+      for (std::size_t i = 0; i < a.quadric_steps.size(); ++i) {
+        largest = std::max(largest, b.quadric_steps[i].cwiseAbs().maxCoeff());
+        ASSERT_EQ(a.quadric_steps[i], b.quadric_steps[i]) << "pixel " << i;
+      }
+      if (estimate_quadrics) {
+        EXPECT_GT(largest, 0.0);
+      }
+    }
+  }
+}
+
 TEST(JointSystemBuffers, ReusedBuffersGiveWhatFreshOnesGive) {
   const JointTestWindow w = render_window(3, 160, "range:1");
   const QuadricMap map = QuadricFit().estimate(w.vertices[0]);
@@ -544,9 +611,7 @@ TEST(JointSystemBuffers, ReusedBuffersGiveWhatFreshOnesGive) {
   for (const auto& [M, estimate_quadrics] : {std::pair{2, true}, {2, false}, {3, true}}) {
     SCOPED_TRACE("M = " + std::to_string(M) + (estimate_quadrics ? "" : ", Q-full"));
     const std::vector<VertexMap> frames(w.vertices.begin(), w.vertices.begin() + M);
-    std::vector<Eigen::Isometry3d> poses{w.truth[0]};
-    for (int j = 1; j < M; ++j)
-      poses.push_back(perturbed(w.truth[j], 0.01, 1.0, j));
+    const std::vector<Eigen::Isometry3d> poses = perturbed_poses(w, M);
     // Every pixel's quadric, then every third: the second system is the smaller.
     const JointState before = quadric_state(map, poses, 1), state = quadric_state(map, poses, 3);
     const JointSystem system(frames, w.camera, pattern, JointParams{}.terms(estimate_quadrics),
@@ -556,7 +621,7 @@ TEST(JointSystemBuffers, ReusedBuffersGiveWhatFreshOnesGive) {
                            JointSampling::kGatheredDouble);  // borrows the frames
     std::vector<Vector6d> steps;
     ReducedSystem reused = pair.linearize(quadric_state(map, {poses[0], poses[1]}, 1), lambda);
-    ASSERT_FALSE(reused.factors.empty());
+    ASSERT_FALSE(reused.blocks.empty());
     ASSERT_TRUE(JointSystem::solve_poses(reused, lambda, steps));
     JointStep reused_step = system.step(before, system.linearize(before, lambda), lambda,
                                         std::vector<Vector6d>(M - 1, Vector6d::Constant(1e-3)));
@@ -570,18 +635,27 @@ TEST(JointSystemBuffers, ReusedBuffersGiveWhatFreshOnesGive) {
     EXPECT_NEAR(reused.cost, fresh.cost, 1e-12 * fresh.cost);
     EXPECT_LT((reused.S - fresh.S).norm(), 1e-12 * fresh.S.norm());
     EXPECT_LT((reused.s - fresh.s).norm(), 1e-12 * fresh.s.norm());
-    auto by_pixel = [](std::vector<PairFactors> f) {
+    auto by_pixel = [](std::vector<PairBlocks> f) {
       std::sort(f.begin(), f.end(),
-                [](const PairFactors& a, const PairFactors& b) { return a.pixel < b.pixel; });
+                [](const PairBlocks& a, const PairBlocks& b) { return a.pixel < b.pixel; });
       return f;
     };
-    const std::vector<PairFactors> a = by_pixel(reused.factors), b = by_pixel(fresh.factors);
+    const std::vector<PairBlocks> a = by_pixel(reused.blocks), b = by_pixel(fresh.blocks);
     ASSERT_EQ(a.size(), b.size());
-    EXPECT_EQ(a.size(), M == 2 && estimate_quadrics ? static_cast<std::size_t>(fresh.active) : 0u);
+    const bool kept = M == 2 && estimate_quadrics;
+    EXPECT_EQ(a.size(), kept ? static_cast<std::size_t>(fresh.active) : 0u);
     for (std::size_t k = 0; k < a.size(); ++k) {
       ASSERT_EQ(a[k].pixel, b[k].pixel);
-      ASSERT_EQ(a[k].k, b[k].k);  // one pixel's factors: the same arithmetic, bit for bit
-      ASSERT_EQ(a[k].K, b[k].K);
+      ASSERT_EQ(a[k].C, b[k].C);  // one pixel's blocks: the same arithmetic, bit for bit
+      ASSERT_EQ(a[k].L, b[k].L);
+      ASSERT_EQ(a[k].B, b[k].B);
+      ASSERT_EQ(a[k].g_gamma, b[k].g_gamma);
+    }
+    // The sums before elimination: those of this system, none left from the pair's.
+    ASSERT_EQ(reused.A_sum.size(), fresh.A_sum.size());
+    EXPECT_EQ(fresh.A_sum.size(), kept ? 36 : 0);
+    if (kept) {
+      EXPECT_LT((reused.A_sum - fresh.A_sum).norm(), 1e-12 * fresh.A_sum.norm());
     }
     std::vector<FixedPixel> fa = reused.fixed_active, fb = fresh.fixed_active;
     std::sort(fa.begin(), fa.end());

@@ -422,6 +422,98 @@ TEST(JointWindowRefinement, NoAcceptedStepThrowsTheFramesOffACorridor) {
   EXPECT_LT(recorder.largest_rotation, 0.5);
 }
 
+// The loop with CpuJointProblem, which after a rejected step only re-damps J-ftf's kept blocks,
+// against the same problem linearising again instead (JointProblem's own redamp): the same
+// iterations, rejections and verdict, the costs and poses to the rounding of the threads' sums.
+// Linearised: once at the start and after each accepted step, every other system re-damped. A
+// pair under range noise from 2 cm / 2°, so that steps are rejected.
+class CountingProblem final : public JointProblem {
+ public:
+  CountingProblem(CpuJointProblem& inner, bool redamps) : inner_(inner), redamps_(redamps) {}
+  ReducedSystem linearize(double lambda) override {
+    ++linearizations;
+    return inner_.linearize(lambda);
+  }
+  void relinearize(double lambda, ReducedSystem& out) override {
+    ++linearizations;
+    inner_.relinearize(lambda, out);
+  }
+  void redamp(double lambda, ReducedSystem& out) override {
+    if (!redamps_) return relinearize(lambda, out);
+    ++redampings;
+    inner_.redamp(lambda, out);
+  }
+  double propose(const ReducedSystem& system, double lambda,
+                 const std::vector<Vector6d>& steps) override {
+    return inner_.propose(system, lambda, steps);
+  }
+  void accept() override { inner_.accept(); }
+  const JointState& state() override { return inner_.state(); }
+  int linearizations = 0, redampings = 0;
+
+ private:
+  CpuJointProblem& inner_;
+  bool redamps_;
+};
+
+TEST(JointFrameToFrame, RedampingAfterARejectedStepEndsWhereLinearizingAgainDoes) {
+  const JointTestWindow w = render_window(2, 160, "range:1");
+  JointParams params;  // the weight and the gate at 3 σ, as the report's pose runs
+  params.quadric.fit.fair_n0_per_range = params.quadric.fit.gate_per_range = 0.03f;
+  const QuadricMap map = QuadricFit(params.quadric).estimate(w.vertices[0]);
+  const std::vector<Eigen::Isometry3d> start = {w.truth[0], perturbed(w.truth[1], 0.02, 2.0, 1)};
+  const JointSystem system(w.vertices, w.camera, params.quadric.pattern_for(w.camera.width),
+                           params.terms(true));
+  CpuJointProblem inner_a(system, initial_joint_state(start, map));
+  CpuJointProblem inner_b(system, initial_joint_state(start, map));
+  CountingProblem redamping(inner_a, true), full(inner_b, false);
+  const RefinementResult a =
+      run_joint_refinement(redamping, params, true, "j-ftf", map, w.vertices[0]);
+  const RefinementResult b = run_joint_refinement(full, params, true, "j-ftf", map, w.vertices[0]);
+  print_report(a.report);
+  ASSERT_GT(b.report.rejected_steps, 0);  // else nothing was re-damped but the final system
+  EXPECT_EQ(redamping.linearizations, a.report.iterations + 1);
+  EXPECT_EQ(full.linearizations, redamping.linearizations + redamping.redampings);
+  EXPECT_EQ(a.report.verdict, b.report.verdict);
+  EXPECT_EQ(a.report.iterations, b.report.iterations);
+  EXPECT_EQ(a.report.rejected_steps, b.report.rejected_steps);
+  ASSERT_EQ(a.report.cost.size(), b.report.cost.size());
+  for (std::size_t k = 0; k < a.report.cost.size(); ++k)
+    EXPECT_NEAR(a.report.cost[k], b.report.cost[k], 1e-9 * b.report.cost[k]) << "iteration " << k;
+  const test::PoseError e = pose_error(a.poses[1], b.poses[1]);
+  std::printf("re-damped against linearised again: %.3g m, %.3g deg\n", e.translation, e.rotation);
+  EXPECT_LT(e.translation, 1e-9);  // m
+  EXPECT_LT(e.rotation, 1e-7);     // deg
+  EXPECT_LT((a.covariance[1] - b.covariance[1]).norm(), 1e-6 * b.covariance[1].norm());
+}
+
+// CpuJointProblem::redamp of J-ftf makes no new sums (its cost, a sum, stays what the caller put
+// there); J-full keeps no blocks and linearises again (the cost comes back).
+TEST(CpuJointProblem, RedampsJftfWithoutNewSums) {
+  const JointTestWindow w = render_window(3, 160, "range:1");
+  const JointParams params;
+  const QuadricMap map = QuadricFit(params.quadric).estimate(w.vertices[0]);
+  for (const int M : {2, 3}) {
+    SCOPED_TRACE("M = " + std::to_string(M));
+    const std::vector<VertexMap> frames(w.vertices.begin(), w.vertices.begin() + M);
+    std::vector<Eigen::Isometry3d> start{w.truth[0]};
+    for (int j = 1; j < M; ++j)
+      start.push_back(perturbed(w.truth[j], 0.01, 1.0, j));
+    const JointSystem system(frames, w.camera, params.quadric.pattern_for(w.camera.width),
+                             params.terms(true));
+    CpuJointProblem problem(system, initial_joint_state(start, map));
+    ReducedSystem lin;
+    problem.relinearize(1e-4, lin);
+    const double cost = lin.cost;
+    const Eigen::MatrixXd S = lin.S;
+    lin.cost = -1.0;  // a sentinel
+    problem.redamp(1e-1, lin);
+    EXPECT_EQ(lin.cost, M == 2 ? -1.0 : cost);
+    EXPECT_EQ(lin.damping, 1e-1);
+    EXPECT_GT((lin.S - S).norm(), 1e-6 * S.norm());  // the damping did change S
+  }
+}
+
 // Q-full's poses are independent (no residual couples two of them), so a window is its poses
 // refined alone against the same quadrics (method.md §8), side by side: the same poses, verdicts
 // and covariance blocks (to the rounding of the threads' sums), the cost their sum. Where every

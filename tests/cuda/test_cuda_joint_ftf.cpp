@@ -200,13 +200,13 @@ TEST(CudaJointFrameToFrame, OneIterationEqualsTheCpuReference) {
     // candidate quadric finite, and the inactive ones unchanged.
     // (The CPU's factors come in the order its threads finished; the GPU's in pixel order.)
     std::vector<unsigned char> active(state.quadrics.size(), 0), cpu_active(active);
-    for (const PairFactors& f : cpu_lin.factors)
-      cpu_active[f.pixel] = 1;
+    for (const PairBlocks& b : cpu_lin.blocks)
+      cpu_active[b.pixel] = 1;
     for (const PairFactors& f : factors) {
       ASSERT_TRUE(f.k.allFinite() && f.K.allFinite()) << "pixel " << f.pixel;
       active[f.pixel] = 1;
     }
-    ASSERT_EQ(factors.size(), cpu_lin.factors.size()) << "seed " << seed + k;
+    ASSERT_EQ(factors.size(), cpu_lin.blocks.size()) << "seed " << seed + k;
     ASSERT_TRUE(active == cpu_active) << "seed " << seed + k;
     for (std::size_t i = 0; i < candidate.quadrics.size(); ++i) {
       if (!finite(state.quadrics[i])) continue;  // only where the CPU state is a number

@@ -69,7 +69,7 @@ void run(benchmark::State& state, bool estimate_quadrics,
     }
     return true;
   };
-  // One untimed iteration first: the buffers' first use (page faults of the ~90 MB of factors at
+  // One untimed iteration first: the buffers' first use (page faults of the ~200 MB of blocks at
   // 640x480) is the loop's start, not its iterations; at 640x480 Google Benchmark times a
   // single iteration per repetition, which was that first one.
   if (!iteration()) {
@@ -99,6 +99,38 @@ void BM_JointWindowIteration(benchmark::State& state) {
 }
 void BM_FixedQuadricIteration(benchmark::State& state) {
   run(state, false);
+}
+
+// A rejected J-ftf step: solve the poses, back-substitute and cost the candidate, then only the
+// damping changes (JointSystem::redamp: the kept blocks eliminated again, no new sums), as the
+// loop does after a step the cost refuses. The damping alternates between two values.
+void BM_JointFrameToFrameRejectedStep(benchmark::State& state) {
+  const jpcr::bench::JointBenchWindow w = jpcr::bench::make_joint_window(
+      static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
+  const jpcr::JointParams params;
+  Problem p(w.vertices, w.camera, params.quadric.pattern.for_width(w.camera.width),
+            params.terms(true), jpcr::JointSampling::kGathered, w.state);
+  double lambda = params.initial_damping;
+  p.system.linearize(p.state, lambda, p.lin);
+  const auto rejected_step = [&] {
+    if (!jpcr::JointSystem::solve_poses(p.lin, lambda, p.steps)) return false;
+    p.system.step(p.state, p.lin, lambda, p.steps, p.step);
+    benchmark::DoNotOptimize(p.step.cost);
+    lambda =
+        lambda == params.initial_damping ? lambda * params.damping_factor : params.initial_damping;
+    return p.system.redamp(lambda, p.lin);
+  };
+  if (!rejected_step()) {  // untimed, as the iterations' first (the candidate's buffers)
+    state.SkipWithError("the reduced system is singular");
+    return;
+  }
+  for (auto _ : state) {
+    if (!rejected_step()) {
+      state.SkipWithError("the reduced system is singular");
+      break;
+    }
+  }
+  state.counters["active_quadrics"] = p.lin.active;
 }
 
 // keep_lower_cost_fits (joint.keep_lower_cost_fit), the pass after the loop: the refined map is
@@ -150,6 +182,11 @@ BENCHMARK(BM_JointFrameToFrameIteration)
     ->Args({640, 2})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+BENCHMARK(BM_JointFrameToFrameRejectedStep)
+    ->Args({320, 2})
+    ->Args({640, 2})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_JointFrameToFrameIterationReference)
     ->Args({320, 2})
     ->Args({640, 2})
@@ -175,10 +212,12 @@ int main(int argc, char** argv) {
       "the CPU: linearise the Schur-reduced system, solve the poses, back-substitute and cost\n"
       "the candidate. room_spheres with 1 % range noise at 320x240 and 640x480, poses 1 cm / 1°\n"
       "off the truth; J-ftf also with the per-sample reference sums the GPU kernels run; and\n"
-      "the pass after the loop that keeps each quadric's lower-cost fit (keep_lower_cost_fit).\n"
+      "the pass after the loop that keeps each quadric's lower-cost fit (keep_lower_cost_fit);\n"
+      "and a rejected J-ftf step (propose, then only the damping changes: redamp).\n"
       "Then the ratios of the same run: gathered / reference sums (J-ftf), Q-full / J-full,\n"
-      "that pass / one iteration (J-ftf at M = 2, J-full at M = 5).",
+      "that pass / one iteration (J-ftf at M = 2, J-full at M = 5), rejected / accepted step.",
       {{"BM_JointFrameToFrameIteration", "BM_JointFrameToFrameIterationReference"},
+       {"BM_JointFrameToFrameRejectedStep", "BM_JointFrameToFrameIteration"},
        {"BM_FixedQuadricIteration", "BM_JointWindowIteration"},
        {"BM_KeepLowerCostFits", "BM_JointFrameToFrameIteration"},
        {"BM_KeepLowerCostFits", "BM_JointWindowIteration"}});
