@@ -34,6 +34,24 @@ struct Problem {
   std::vector<jpcr::Vector6d> steps;
 };
 
+// Times `iteration` (false: the reduced system was singular, which ends the benchmark with that
+// error) after one untimed call: the buffers' first use (page faults of the ~200 MB of blocks at
+// 640x480) is the loop's start, not its iterations; at 640x480 Google Benchmark times a single
+// iteration per repetition, which was that first one.
+template <typename Iteration>
+void time_iterations(benchmark::State& state, Iteration&& iteration) {
+  if (!iteration()) {
+    state.SkipWithError("the reduced system is singular");
+    return;
+  }
+  for (auto _ : state) {
+    if (!iteration()) {
+      state.SkipWithError("the reduced system is singular");
+      break;
+    }
+  }
+}
+
 // estimate_quadrics = true: one problem over the window (J-ftf, J-full). false: Q-full, whose
 // poses are independent problems (fixed_quadric_alignment.hpp), each the reference frame and
 // one other; an iteration is one of each.
@@ -69,19 +87,7 @@ void run(benchmark::State& state, bool estimate_quadrics,
     }
     return true;
   };
-  // One untimed iteration first: the buffers' first use (page faults of the ~200 MB of blocks at
-  // 640x480) is the loop's start, not its iterations; at 640x480 Google Benchmark times a
-  // single iteration per repetition, which was that first one.
-  if (!iteration()) {
-    state.SkipWithError("the reduced system is singular");
-    return;
-  }
-  for (auto _ : state) {
-    if (!iteration()) {
-      state.SkipWithError("the reduced system is singular");
-      break;
-    }
-  }
+  time_iterations(state, iteration);
   state.counters["active_quadrics"] = active;
   state.counters["samples"] = pattern.size();
 }
@@ -120,16 +126,7 @@ void BM_JointFrameToFrameRejectedStep(benchmark::State& state) {
         lambda == params.initial_damping ? lambda * params.damping_factor : params.initial_damping;
     return p.system.redamp(lambda, p.lin);
   };
-  if (!rejected_step()) {  // untimed, as the iterations' first (the candidate's buffers)
-    state.SkipWithError("the reduced system is singular");
-    return;
-  }
-  for (auto _ : state) {
-    if (!rejected_step()) {
-      state.SkipWithError("the reduced system is singular");
-      break;
-    }
-  }
+  time_iterations(state, rejected_step);
   state.counters["active_quadrics"] = p.lin.active;
 }
 
