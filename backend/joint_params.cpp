@@ -26,6 +26,9 @@ void JointParams::validate() const {
   if (!(max_damping > initial_damping))
     throw InputError("max_damping: must exceed initial_damping");
   if (min_active_quadrics < 1) throw InputError("min_active_quadrics: must be at least 1");
+  // At most 1 PiB: a byte count that fits std::size_t.
+  if (!(block_memory_mb >= 0.0 && block_memory_mb <= 1.0e9))
+    throw InputError("block_memory_mb: must be in [0, 1e9] (MiB; 0 keeps no blocks)");
   if (!(degeneracy_threshold >= 0.0 && degeneracy_threshold < 1.0))
     throw InputError("degeneracy_threshold: must be in [0, 1)");
 }

@@ -2,6 +2,8 @@
 // in-class defaults and units; YAML maps onto it in io/ only.
 #pragma once
 
+#include <cstddef>
+
 #include "jpcr/backend/joint_pixel_kernel.hpp"
 #include "jpcr/quadric/quadric_params.hpp"
 
@@ -47,6 +49,12 @@ struct JointParams {
                                   // between two values with every other step rejected)
   double max_damping = 1e6;       // λ above it: the cost cannot be lowered → diverged
   int min_active_quadrics = 50;   // fewer quadrics seen in another frame: too_few_quadrics
+  // MiB: each linearisation keeps every quadric's blocks (JointSystem::block_bytes: 0.7 kB in
+  // a pair, 1.6 kB in a window of 5) where they fit in this, so that the step back-substitutes
+  // without computing each quadric's system again and a rejected step costs only a new damping
+  // (JointSystem::redamp); otherwise both compute the sums again (the same results, slower).
+  // 1024 holds a 640x480 window of 8 frames; 0 never keeps them.
+  double block_memory_mb = 1024.0;
   // Unit-free λmin / λmax of S below it: degenerate. Measured at 160x120: 0.007-0.02 on the
   // synthetic scenes (J-ftf, J-full windows of 4), 5e-10 on the corridor (two parallel planes).
   double degeneracy_threshold = 1e-4;
@@ -66,5 +74,10 @@ struct JointParams {
 
   void validate() const;  // throws InputError "field: problem"
 };
+
+/// block_memory_mb in bytes.
+inline std::size_t block_memory_bytes(const JointParams& p) {
+  return static_cast<std::size_t>(p.block_memory_mb * 1024.0 * 1024.0);
+}
 
 }  // namespace jpcr

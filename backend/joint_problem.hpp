@@ -53,7 +53,8 @@ class CpuJointProblem final : public JointProblem {
   void relinearize(double lambda, ReducedSystem& out) override {
     system_.linearize(state_, lambda, out);
   }
-  /// JointSystem::redamp (J-ftf: no new sums; Q-full: nothing to do), else linearize again.
+  /// JointSystem::redamp (J-ftf and J-full with kept blocks: no new sums; Q-full: nothing to
+  /// do), else linearize again.
   void redamp(double lambda, ReducedSystem& out) override {
     if (!system_.redamp(lambda, out)) system_.linearize(state_, lambda, out);
   }

@@ -30,8 +30,8 @@ std::vector<RigidMotion<double>> motions_of(const std::vector<Eigen::Isometry3d>
 }
 
 // One thread's share of the reduced system, merged into the total at the end (double). Its
-// blocks and active pixels are one row's, moved into the output after each row (append_rows).
-// A_sum and a_sum: the same sums before elimination (J-ftf's kept blocks).
+// blocks, couplings and active pixels are one row's, moved into the output after each row
+// (append_rows). A_sum and a_sum: the same sums before elimination (for the kept blocks).
 struct ReductionShare {
   explicit ReductionShare(int n, int poses)
       : S(static_cast<std::size_t>(n) * n, 0.0),
@@ -42,7 +42,8 @@ struct ReductionShare {
         seen(poses, 0) {}
   std::vector<double> S, s, A_diagonal, A_sum, a_sum;
   std::vector<int> seen;
-  std::vector<PairBlocks> blocks;
+  std::vector<QuadricBlocks> blocks;
+  std::vector<Matrix6d> couplings;
   std::vector<FixedPixel> fixed_active;
   double cost = 0.0;
   long terms = 0;
@@ -58,12 +59,24 @@ Eigen::MatrixXd symmetric_of(const std::vector<double>& lower, int n) {
 // Moves a thread's row of entries to the next free place of `all` (sized for every valid pixel
 // beforehand) and empties it: no thread's buffer grows past a row, and `all` keeps its capacity
 // from one iteration to the next.
+// Returns where the row went.
 template <typename T>
-void append_rows(std::vector<T>& row, std::vector<T>& all, std::atomic<std::size_t>& end) {
-  if (row.empty()) return;
+std::size_t append_rows(std::vector<T>& row, std::vector<T>& all, std::atomic<std::size_t>& end) {
+  if (row.empty()) return end.load();
   const std::size_t at = end.fetch_add(row.size());
   std::copy(row.begin(), row.end(), all.begin() + static_cast<std::ptrdiff_t>(at));
   row.clear();
+  return at;
+}
+
+// The row's kept blocks, and their couplings (`poses` per block) at the same place.
+void append_blocks(ReductionShare& row, ReducedSystem& out, int poses,
+                   std::atomic<std::size_t>& end) {
+  if (row.blocks.empty()) return;
+  const std::size_t at = append_rows(row.blocks, out.blocks, end);
+  std::copy(row.couplings.begin(), row.couplings.end(),
+            out.couplings.begin() + static_cast<std::ptrdiff_t>(at * poses));
+  row.couplings.clear();
 }
 
 // The pixels are processed row by row; rows are handed out in small dynamic chunks because the
@@ -87,18 +100,35 @@ Matrix6d unpack_lower(const std::array<double, 21>& packed) {
   return m;
 }
 
-// Keeps an active pair quadric's blocks: its undamped C_p, the damped factor sys.L, B, −b.
-void keep_blocks_of(std::size_t pixel, const Matrix6d& C, const JointPixelSystem<double, 2>& sys,
-                    PairBlocks& b) {
+// Keeps an active quadric's blocks: its undamped C_p, the damped factor sys.L, −b, and each
+// B_jp (zero where frame j does not see it).
+template <int MaxFrames>
+void keep_blocks_of(std::size_t pixel, const Matrix6d& C,
+                    const JointPixelSystem<double, MaxFrames>& sys, int frames,
+                    ReductionShare& share) {
+  QuadricBlocks& b = share.blocks.emplace_back();
   b.pixel = pixel;
+  b.seen = seen_bits(sys, frames);
   pack_lower(C, b.C);
   pack_lower(sys.L, b.L);
-  b.B = sys.B[0];
   b.g_gamma = sys.g_gamma;
+  for (int j = 0; j + 1 < frames; ++j)
+    share.couplings.push_back(sys.seen[j] ? sys.B[j] : Matrix6d::Zero());
+}
+
+// A kept quadric's B_jp and seen flags back into `sys` (its factors are then recomputed).
+template <int MaxFrames>
+void restore_couplings(const QuadricBlocks& b, const Matrix6d* couplings, int frames,
+                       JointPixelSystem<double, MaxFrames>& sys) {
+  for (int j = 0; j + 1 < frames; ++j) {
+    sys.seen[j] = ((b.seen >> j) & 1u) != 0u;
+    if (sys.seen[j]) sys.B[j] = couplings[j];
+  }
+  sys.g_gamma = b.g_gamma;
 }
 
 // Row v of the reference frame: each active quadric's share of the reduced system; with
-// keep_blocks (M = 2) also its blocks and its pose terms on their own.
+// keep_blocks also its blocks and its pose terms on their own.
 template <int MaxFrames, typename Sampler>
 void linearize_row(const JointState& state, const JointWindowView<double>& window,
                    const JointTermParams& p, double lambda, int v, int width, bool keep_blocks,
@@ -119,19 +149,16 @@ void linearize_row(const JointState& state, const JointWindowView<double>& windo
     ++share.active;
     for (int j = 0; j + 1 < M; ++j)
       share.seen[j] += sys.seen[j] ? 1 : 0;
-    if constexpr (MaxFrames == 2) {
-      if (keep_blocks) {
-        add_pose_terms(sys, M, share.A_sum.data(), share.a_sum.data(),
-                       static_cast<double*>(nullptr));
-        keep_blocks_of(i, C, sys, share.blocks.emplace_back());
-      }
+    if (keep_blocks) {
+      add_pose_terms(sys, M, share.A_sum.data(), share.a_sum.data(), static_cast<double*>(nullptr));
+      keep_blocks_of(i, C, sys, M, share);
     }
     if (!p.estimate_quadrics) share.fixed_active.push_back(FixedPixel{i, seen_bits(sys, M)});
   }
 }
 
 // Row v, recomputing each active quadric's system: its back-substitution and its cost at the
-// candidate (windows of M > 2).
+// candidate (where the blocks were not kept).
 template <int MaxFrames, typename Sampler>
 double step_row(const JointState& state, const JointWindowView<double>& window,
                 const JointWindowView<double>& next, const JointTermParams& p, double lambda,
@@ -154,21 +181,41 @@ double step_row(const JointState& state, const JointWindowView<double>& window,
   return cost;
 }
 
-// J-ftf's step from the kept blocks, Δγ_p = (C_p + λ diag C_p)⁻¹ (b_p − B_pᵀ Δξ) with their
-// factor (method.md §6: k − K Δξ, one right-hand side instead of K's six), then the candidate's
-// cost (frame 2 sees every active quadric of a pair).
+// The step of a kept quadric, Δγ_p = (C_p + λ diag C_p)⁻¹ (b_p − Σ_j B_jpᵀ Δξ_j) with its
+// factor (method.md §6–§7: k − Σ_j K_j Δξ_j, one right-hand side instead of K_j's six each),
+// then the candidate's cost over the frames that saw it.
 template <typename Sampler>
-double step_blocks(const PairBlocks& b, const JointState& state,
+double step_blocks(const QuadricBlocks& b, const Matrix6d* couplings, const JointState& state,
                    const JointWindowView<double>& window, const JointWindowView<double>& next,
-                   const JointTermParams& p, const Vector6d& pose_step, int width, Sampler& sampler,
-                   JointStep& out) {
-  QuadricVector<double> delta = -b.g_gamma - b.B.transpose() * pose_step;
+                   const JointTermParams& p, const Vector6d* pose_steps, int width,
+                   Sampler& sampler, JointStep& out) {
+  QuadricVector<double> delta = -b.g_gamma;
+  for (int j = 0; j + 1 < window.frames; ++j)
+    if ((b.seen >> j) & 1u) delta -= couplings[j].transpose() * pose_steps[j];
   cholesky_solve<double, 6>(unpack_lower(b.L), delta);
   Quadricd& q = out.candidate.quadrics[b.pixel];
   out.quadric_steps[b.pixel] = delta;
   apply_quadric_update(q, out.quadric_steps[b.pixel]);
   const int u = static_cast<int>(b.pixel % width), v = static_cast<int>(b.pixel / width);
-  return linearized_pixel_cost(q, state.quadrics[b.pixel], window, next, u, v, 1u, p, sampler);
+  return linearized_pixel_cost(q, state.quadrics[b.pixel], window, next, u, v, b.seen, p, sampler);
+}
+
+// Eliminates blocks[begin, end) again at the damping λ into S and s (lower triangle, row-major)
+// and keeps their new factors.
+template <int MaxFrames>
+void redamp_blocks(ReducedSystem& system, int frames, double lambda, long begin, long end,
+                   double* S, double* s) {
+  JointPixelSystem<double, MaxFrames> sys;
+  const int poses = frames - 1;
+  for (long k = begin; k < end; ++k) {
+    QuadricBlocks& b = system.blocks[static_cast<std::size_t>(k)];
+    restore_couplings(b, system.couplings.data() + k * poses, frames, sys);
+    // Not after linearize: its undamped C_p passed the pivot test there.
+    if (!factor_damped_quadric(unpack_lower(b.C), lambda, frames, sys))
+      throw std::logic_error("JointSystem: a kept quadric's damped C_p is not positive definite");
+    eliminate_quadric(sys, frames, S, s);
+    pack_lower(sys.L, b.L);
+  }
 }
 
 // The sums per frame: gathered and vectorised across samples (the default), or sample by sample
@@ -199,8 +246,8 @@ void with_sampler(JointSampling sampling, int pattern_size, ParallelGuard& guard
 
 JointSystem::JointSystem(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
                          const NeighbourhoodPattern& pattern, const JointTermParams& params,
-                         JointSampling sampling)
-    : pattern_(pattern.offsets), params_(params), sampling_(sampling) {
+                         JointSampling sampling, std::size_t block_memory)
+    : pattern_(pattern.offsets), params_(params), sampling_(sampling), block_memory_(block_memory) {
   // The per-pixel kernels hold at most kMaxWindowFrames frames; more would be left out of the
   // sums while the reduced system still counts their poses (singular S).
   if (frames.size() < 2 || frames.size() > static_cast<std::size_t>(kMaxWindowFrames))
@@ -213,6 +260,11 @@ JointSystem::JointSystem(const std::vector<VertexMap>& frames, const CameraIntri
   height_ = frames.empty() ? 0 : frames[0].height();
 }
 
+std::size_t JointSystem::block_bytes(int frames) {
+  return sizeof(QuadricBlocks) +
+         static_cast<std::size_t>(std::max(frames - 1, 0)) * sizeof(Matrix6d);
+}
+
 ReducedSystem JointSystem::linearize(const JointState& state, double lambda) const {
   ReducedSystem out;
   linearize(state, lambda, out);
@@ -223,10 +275,12 @@ void JointSystem::linearize(const JointState& state, double lambda, ReducedSyste
   const int M = frames(), n = 6 * (M - 1);
   const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
   const JointWindowView<double> window = window_view(motions);
-  const bool keep_blocks = M == 2 && params_.estimate_quadrics;
   const auto valid = static_cast<std::size_t>(
       std::count(state.valid.begin(), state.valid.end(), static_cast<unsigned char>(1)));
+  const bool keep_blocks = params_.estimate_quadrics && valid <= block_memory_ / block_bytes(M);
+  out.keeps_blocks = false;  // until linearised (a half-filled system is not stepped)
   out.blocks.resize(keep_blocks ? valid : 0);
+  out.couplings.resize(keep_blocks ? valid * (M - 1) : 0);
   out.fixed_active.resize(params_.estimate_quadrics ? 0 : valid);
   std::atomic<std::size_t> blocks_end{0}, fixed_end{0};
   ReductionShare total(n, M - 1);
@@ -244,9 +298,9 @@ void JointSystem::linearize(const JointState& state, double lambda, ReducedSyste
             linearize_row<2>(state, window, params_, lambda, v, width_, keep_blocks, *sampler,
                              *share);
           else
-            linearize_row<kMaxWindowFrames>(state, window, params_, lambda, v, width_, false,
+            linearize_row<kMaxWindowFrames>(state, window, params_, lambda, v, width_, keep_blocks,
                                             *sampler, *share);
-          append_rows(share->blocks, out.blocks, blocks_end);
+          append_blocks(*share, out, M - 1, blocks_end);
           append_rows(share->fixed_active, out.fixed_active, fixed_end);
         } catch (...) {
           guard.record_current();
@@ -273,6 +327,7 @@ void JointSystem::linearize(const JointState& state, double lambda, ReducedSyste
   }
   guard.rethrow();
   out.blocks.resize(blocks_end);
+  out.couplings.resize(blocks_end * (M - 1));
   out.fixed_active.resize(fixed_end);
   out.S = symmetric_of(total.S, n);
   out.s = Eigen::Map<const Eigen::VectorXd>(total.s.data(), n);
@@ -285,6 +340,7 @@ void JointSystem::linearize(const JointState& state, double lambda, ReducedSyste
   }
   out.A_diagonal = Eigen::Map<const Eigen::VectorXd>(total.A_diagonal.data(), n);
   out.damping = lambda;
+  out.keeps_blocks = keep_blocks;
   out.cost = total.cost;
   out.terms = total.terms;
   out.active = total.active;
@@ -301,8 +357,10 @@ bool JointSystem::redamp(double lambda, ReducedSystem& system) const {
     system.damping = lambda;
     return true;
   }
-  if (poses != 1 || system.A_sum.rows() != n || system.a_sum.size() != n) return false;
-  // Until the new factors are all in place: a step on a half-redamped system throws (step_pair).
+  if (!system.keeps_blocks || system.A_sum.rows() != n || system.a_sum.size() != n ||
+      system.couplings.size() != system.blocks.size() * poses)
+    return false;
+  // Until the new factors are all in place: a step on a half-redamped system throws (step_kept).
   system.damping = std::numeric_limits<double>::quiet_NaN();
   std::vector<double> S(n * n, 0.0), s(n, 0.0);
   for (int r = 0; r < n; ++r) {
@@ -311,6 +369,7 @@ bool JointSystem::redamp(double lambda, ReducedSystem& system) const {
       S[r * n + c] = system.A_sum(r, c);
   }
   const long count = static_cast<long>(system.blocks.size());
+  constexpr long kChunk = 256;
   ParallelGuard guard;  // e.g. a worker's share out of memory: rethrown, not std::terminate
 #pragma omp parallel
   {
@@ -319,20 +378,16 @@ bool JointSystem::redamp(double lambda, ReducedSystem& system) const {
       share_S.assign(n * n, 0.0);
       share_s.assign(n, 0.0);
     });
-    JointPixelSystem<double, 2> sys;
-    sys.seen[0] = true;
 #pragma omp for schedule(static) nowait
-    for (long k = 0; k < count; ++k) {
+    for (long begin = 0; begin < count; begin += kChunk) {
       if (guard.failed() || share_S.empty()) continue;
       try {
-        PairBlocks& b = system.blocks[static_cast<std::size_t>(k)];
-        sys.B[0] = b.B;
-        sys.g_gamma = b.g_gamma;
-        // Not after linearize: its undamped C_p passed the pivot test there.
-        if (!factor_damped_quadric(unpack_lower(b.C), lambda, 2, sys))
-          throw std::logic_error("J-ftf: a kept quadric's damped C_p is not positive definite");
-        eliminate_quadric(sys, 2, share_S.data(), share_s.data());
-        pack_lower(sys.L, b.L);
+        const long end = std::min(begin + kChunk, count);
+        if (poses == 1)
+          redamp_blocks<2>(system, 2, lambda, begin, end, share_S.data(), share_s.data());
+        else
+          redamp_blocks<kMaxWindowFrames>(system, poses + 1, lambda, begin, end, share_S.data(),
+                                          share_s.data());
       } catch (...) {
         guard.record_current();
       }
@@ -370,7 +425,7 @@ JointWindowView<double> JointSystem::window_view(
           camera_,       pattern_.data(), static_cast<int>(pattern_.size())};
 }
 
-void JointSystem::step_pair(const JointState& state, const ReducedSystem& system, double lambda,
+void JointSystem::step_kept(const JointState& state, const ReducedSystem& system, double lambda,
                             const JointWindowView<double>& window,
                             const JointWindowView<double>& next, JointStep& out) const {
   if (lambda != system.damping) {  // also NaN: a redamp that did not finish
@@ -388,8 +443,9 @@ void JointSystem::step_pair(const JointState& state, const ReducedSystem& system
     for (long k = 0; k < count; ++k) {
       if (guard.failed() || !sampler) continue;
       try {
-        cost += step_blocks(system.blocks[static_cast<std::size_t>(k)], state, window, next,
-                            params_, out.pose_steps[0], width_, *sampler, out);
+        cost += step_blocks(system.blocks[static_cast<std::size_t>(k)],
+                            system.couplings.data() + k * (frames() - 1), state, window, next,
+                            params_, out.pose_steps.data(), width_, *sampler, out);
       } catch (...) {
         guard.record_current();
       }
@@ -459,12 +515,12 @@ void JointSystem::step(const JointState& state, const ReducedSystem& system, dou
   const std::vector<RigidMotion<double>> motions = motions_of(state.poses);
   const std::vector<RigidMotion<double>> moved = motions_of(out.candidate.poses);
   const JointWindowView<double> window = window_view(motions), next = window_view(moved);
-  // J-ftf keeps its blocks, Q-full has no quadric step (only the candidate's cost), J-full
-  // recomputes each quadric's system.
+  // Q-full has no quadric step (only the candidate's cost); J-ftf and J-full back-substitute
+  // from their kept blocks, or recompute each quadric's system where the blocks were not kept.
   if (!params_.estimate_quadrics)
     step_fixed(state, system, window, next, out);
-  else if (frames() == 2)
-    step_pair(state, system, lambda, window, next, out);
+  else if (system.keeps_blocks)
+    step_kept(state, system, lambda, window, next, out);
   else
     step_window(state, lambda, window, next, out);
 }

@@ -41,16 +41,15 @@ struct PairFactors {
   Matrix6d K;               // C_p⁻¹ B_pᵀ
 };
 
-/// What the CPU J-ftf keeps of one active quadric's linearisation (84 numbers): the undamped
-/// C_p, B_p and −b_p, from which another damping λ needs no new sums (JointSystem::redamp), and
-/// the Cholesky factor of C_p + λ diag C_p at the system's damping, for the back-substitution
-/// Δγ_p = (C_p + λ diag C_p)⁻¹ (b_p − B_pᵀ Δξ). Only for M = 2; larger windows would keep
-/// (M − 1)·36 + 48 numbers per quadric (1.5 kB at M = 5) and recompute the system instead.
-struct PairBlocks {
+/// What the CPU keeps of one active quadric's linearisation (48 numbers, and its B_jp in
+/// ReducedSystem::couplings): the undamped C_p and −b_p, from which another damping λ needs no
+/// new sums (JointSystem::redamp), and the Cholesky factor of C_p + λ diag C_p at the system's
+/// damping, for the back-substitution Δγ_p = (C_p + λ diag C_p)⁻¹ (b_p − Σ_j B_jpᵀ Δξ_j).
+struct QuadricBlocks {
   std::size_t pixel = 0;          // row-major index in the reference frame
+  unsigned seen = 0;              // bit j − 2: frame j sees it (B_jp is zero otherwise)
   std::array<double, 21> C;       // the lower triangle of the undamped C_p, column by column
   std::array<double, 21> L;       // the lower triangle of the damped C_p's Cholesky factor
-  Matrix6d B;                     // B_p
   QuadricVector<double> g_gamma;  // −b_p
 };
 
@@ -66,9 +65,12 @@ struct ReducedSystem {
   std::vector<int> seen;                 // per pose T_2 … T_M: active quadrics that frame sees
   std::vector<FixedPixel> fixed_active;  // Q-full: the active quadrics and their frames
   double damping = 0.0;                  // λ in the C_p of S (and of the blocks' factors)
-  // The CPU J-ftf (M = 2): every active quadric's blocks, and S and s before any quadric is
-  // eliminated (Σ_p A_p and a = −Σ_p g_ξp): what redamp needs.
-  std::vector<PairBlocks> blocks;
+  // Where the blocks fit in JointSystem's budget: every active quadric's blocks, its B_jp
+  // (couplings[k (M − 1) + j − 2] for blocks[k]), and S and s before any quadric is eliminated
+  // (Σ_p A_p and a = −Σ_p g_ξp): what redamp and the step without new sums need.
+  bool keeps_blocks = false;
+  std::vector<QuadricBlocks> blocks;
+  std::vector<Matrix6d> couplings;
   Eigen::MatrixXd A_sum;
   Eigen::VectorXd a_sum;
 };
@@ -88,15 +90,27 @@ struct JointStep {
 /// double exactly as the GPU kernels do (the reference the tests compare with).
 enum class JointSampling { kGathered, kGatheredDouble, kReference };
 
+/// The memory a JointSystem may give its kept blocks unless told otherwise (JointParams'
+/// block_memory_mb): 1 GiB holds a 640x480 window of up to 8 frames.
+inline constexpr std::size_t kDefaultBlockMemory = std::size_t{1} << 30;
+
 class JointSystem {
  public:
   /// frames[0] is the reference; all frames share `camera` (sizes are checked by the caller).
   /// Throws std::invalid_argument unless 2 ≤ frames.size() ≤ kMaxWindowFrames.
+  /// The linearisation keeps every active quadric's blocks (QuadricBlocks, couplings) where
+  /// those of all valid quadrics fit in `block_memory` bytes (block_bytes each): the step then
+  /// back-substitutes from them and a new damping needs no new sums (redamp). Otherwise each
+  /// quadric's system is computed again for the step, and every damping linearises again.
   JointSystem(const std::vector<VertexMap>& frames, const CameraIntrinsics& camera,
               const NeighbourhoodPattern& pattern, const JointTermParams& params,
-              JointSampling sampling = JointSampling::kGathered);
+              JointSampling sampling = JointSampling::kGathered,
+              std::size_t block_memory = kDefaultBlockMemory);
 
   int frames() const { return static_cast<int>(views_.size()); }
+  /// The bytes one quadric's kept blocks take in a window of `frames` frames (at 640x480 a pair
+  /// keeps about 210 MB, a window of 5 about 480 MB).
+  static std::size_t block_bytes(int frames);
   const JointTermParams& params() const { return params_; }
 
   /// The reduced system at `state`, with the Levenberg damping λ on C_p.
@@ -106,11 +120,11 @@ class JointSystem {
   void linearize(const JointState& state, double lambda, ReducedSystem& out) const;
 
   /// Turns `system`, a linearize(state, λ₀) of this JointSystem, into linearize(state, λ) (to
-  /// rounding) without new sums: the damping is all that changes after a rejected step. J-ftf
-  /// eliminates its kept blocks again (no gathering); Q-full's system does not depend on λ.
-  /// False, and `system` unchanged, where it cannot (J-full keeps no blocks, or `system` is of
-  /// another size): then linearize again. After an exception (a worker out of memory) `system`
-  /// is to be linearised again; a step on it throws until then.
+  /// rounding) without new sums: the damping is all that changes after a rejected step. J-ftf and
+  /// J-full eliminate their kept blocks again (no gathering); Q-full's system does not depend on
+  /// λ. False, and `system` unchanged, where it cannot (the blocks were over the budget, or
+  /// `system` is of another size): then linearize again. After an exception (a worker out of
+  /// memory) `system` is to be linearised again; a step on it throws until then.
   bool redamp(double lambda, ReducedSystem& system) const;
 
   /// Solves (S + λ diag A) Δξ = s with LDLT; false when it is not positive definite or the step
@@ -120,9 +134,9 @@ class JointSystem {
 
   /// Back-substitutes Δγ_p for the poses' step and evaluates the cost of the candidate over the
   /// linearisation's terms (each frame's pattern where it was associated at `state`). `system` and
-  /// λ are those of linearize(state, λ) (or redamp): J-ftf uses the blocks kept in `system`,
-  /// larger windows recompute each quadric's system. Throws std::invalid_argument when J-ftf's λ
-  /// is not the system's damping.
+  /// λ are those of linearize(state, λ) (or redamp): the blocks kept in `system`, else each
+  /// quadric's system computed again. Throws std::invalid_argument when the blocks are kept and
+  /// λ is not the system's damping.
   JointStep step(const JointState& state, const ReducedSystem& system, double lambda,
                  const std::vector<Vector6d>& pose_steps) const;
   /// The same into `out`, reusing its buffers (the candidate state and the quadric steps).
@@ -133,7 +147,7 @@ class JointSystem {
   /// The window seen from `motions` (one per frame, T_j as RigidMotion).
   JointWindowView<double> window_view(const std::vector<RigidMotion<double>>& motions) const;
   // Each costs the candidate: `window` at the linearisation's poses, `next` at the candidate's.
-  void step_pair(const JointState& state, const ReducedSystem& system, double lambda,
+  void step_kept(const JointState& state, const ReducedSystem& system, double lambda,
                  const JointWindowView<double>& window, const JointWindowView<double>& next,
                  JointStep& out) const;
   void step_fixed(const JointState& state, const ReducedSystem& system,
@@ -149,6 +163,7 @@ class JointSystem {
   std::vector<PixelOffset> pattern_;
   JointTermParams params_;
   JointSampling sampling_ = JointSampling::kGathered;
+  std::size_t block_memory_ = kDefaultBlockMemory;
   int width_ = 0, height_ = 0;
 };
 

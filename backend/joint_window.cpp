@@ -33,7 +33,8 @@ RefinementResult refine_window(const std::vector<VertexMap>& vertices,
                                const std::vector<unsigned char>* edges) {
   check_joint_inputs(vertices, camera, initial_poses, initial_quadrics);
   const JointSystem system(vertices, camera, params.quadric.pattern_for(camera.width),
-                           params.terms(estimate_quadrics));
+                           params.terms(estimate_quadrics), JointSampling::kGathered,
+                           block_memory_bytes(params));
   JointState initial = initial_joint_state(initial_poses, initial_quadrics);
   const int left_out = leave_out(edges ? *edges : edge_quadrics(vertices[0], params), initial);
   CpuJointProblem problem(system, std::move(initial));

@@ -184,6 +184,7 @@ void read_joint(YamlSection yaml, JointParams& p) {
   yaml.read("max_damping", p.max_damping);
   yaml.read("min_active_quadrics", p.min_active_quadrics);
   yaml.read("degeneracy_threshold", p.degeneracy_threshold);
+  yaml.read("block_memory_mb", p.block_memory_mb);
   yaml.finish();
   validate_in(yaml, p);
 }

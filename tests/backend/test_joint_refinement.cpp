@@ -487,30 +487,33 @@ TEST(JointFrameToFrame, RedampingAfterARejectedStepEndsWhereLinearizingAgainDoes
   EXPECT_LT((a.covariance[1] - b.covariance[1]).norm(), 1e-6 * b.covariance[1].norm());
 }
 
-// CpuJointProblem::redamp of J-ftf makes no new sums (its cost, a sum, stays what the caller put
-// there); J-full keeps no blocks and linearises again (the cost comes back).
-TEST(CpuJointProblem, RedampsJftfWithoutNewSums) {
+// CpuJointProblem::redamp of J-ftf and J-full makes no new sums (its cost, a sum, stays what the
+// caller put there); without kept blocks (block_memory 0) it linearises again (the cost comes
+// back).
+TEST(CpuJointProblem, RedampsWithoutNewSumsWhereTheBlocksAreKept) {
   const JointTestWindow w = render_window(3, 160, "range:1");
   const JointParams params;
   const QuadricMap map = QuadricFit(params.quadric).estimate(w.vertices[0]);
   for (const int M : {2, 3}) {
-    SCOPED_TRACE("M = " + std::to_string(M));
-    const std::vector<VertexMap> frames(w.vertices.begin(), w.vertices.begin() + M);
-    std::vector<Eigen::Isometry3d> start{w.truth[0]};
-    for (int j = 1; j < M; ++j)
-      start.push_back(perturbed(w.truth[j], 0.01, 1.0, j));
-    const JointSystem system(frames, w.camera, params.quadric.pattern_for(w.camera.width),
-                             params.terms(true));
-    CpuJointProblem problem(system, initial_joint_state(start, map));
-    ReducedSystem lin;
-    problem.relinearize(1e-4, lin);
-    const double cost = lin.cost;
-    const Eigen::MatrixXd S = lin.S;
-    lin.cost = -1.0;  // a sentinel
-    problem.redamp(1e-1, lin);
-    EXPECT_EQ(lin.cost, M == 2 ? -1.0 : cost);
-    EXPECT_EQ(lin.damping, 1e-1);
-    EXPECT_GT((lin.S - S).norm(), 1e-6 * S.norm());  // the damping did change S
+    for (const std::size_t block_memory : {kDefaultBlockMemory, std::size_t{0}}) {
+      SCOPED_TRACE("M = " + std::to_string(M) + ", block memory " + std::to_string(block_memory));
+      const std::vector<VertexMap> frames(w.vertices.begin(), w.vertices.begin() + M);
+      std::vector<Eigen::Isometry3d> start{w.truth[0]};
+      for (int j = 1; j < M; ++j)
+        start.push_back(perturbed(w.truth[j], 0.01, 1.0, j));
+      const JointSystem system(frames, w.camera, params.quadric.pattern_for(w.camera.width),
+                               params.terms(true), JointSampling::kGathered, block_memory);
+      CpuJointProblem problem(system, initial_joint_state(start, map));
+      ReducedSystem lin;
+      problem.relinearize(1e-4, lin);
+      const double cost = lin.cost;
+      const Eigen::MatrixXd S = lin.S;
+      lin.cost = -1.0;  // a sentinel
+      problem.redamp(1e-1, lin);
+      EXPECT_EQ(lin.cost, block_memory > 0 ? -1.0 : cost);
+      EXPECT_EQ(lin.damping, 1e-1);
+      EXPECT_GT((lin.S - S).norm(), 1e-6 * S.norm());  // the damping did change S
+    }
   }
 }
 

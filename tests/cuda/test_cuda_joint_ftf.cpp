@@ -200,7 +200,7 @@ TEST(CudaJointFrameToFrame, OneIterationEqualsTheCpuReference) {
     // candidate quadric finite, and the inactive ones unchanged.
     // (The CPU's factors come in the order its threads finished; the GPU's in pixel order.)
     std::vector<unsigned char> active(state.quadrics.size(), 0), cpu_active(active);
-    for (const PairBlocks& b : cpu_lin.blocks)
+    for (const QuadricBlocks& b : cpu_lin.blocks)
       cpu_active[b.pixel] = 1;
     for (const PairFactors& f : factors) {
       ASSERT_TRUE(f.k.allFinite() && f.K.allFinite()) << "pixel " << f.pixel;

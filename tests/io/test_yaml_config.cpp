@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include "jpcr/backend/joint_system.hpp"
 #include "jpcr/io/camera_yaml.hpp"
 #include "jpcr/io/params.hpp"
 #include "jpcr/quadric/error.hpp"
@@ -230,6 +231,29 @@ TEST(Params, JointEdgeTilt) {
               parse_params("joint:\n  edge_tilt: 0.01\n", "e.yaml");
             }).find("joint.edge_tilt"),
             std::string::npos);
+}
+
+// joint.block_memory_mb: the shipped value is the built-in default (1 GiB), 0 keeps no blocks, and
+// a negative or non-finite budget names the file, line and key.
+TEST(Params, JointBlockMemory) {
+  const JointParams shipped = load_params(kConfigs + "default.yaml").joint;
+  EXPECT_DOUBLE_EQ(shipped.block_memory_mb, JointParams{}.block_memory_mb);
+  EXPECT_EQ(block_memory_bytes(shipped), kDefaultBlockMemory);
+  const JointParams none = parse_params("joint:\n  block_memory_mb: 0\n", "p.yaml").joint;
+  EXPECT_EQ(block_memory_bytes(none), 0u);
+  EXPECT_EQ(block_memory_bytes(parse_params("joint:\n  block_memory_mb: 0.5\n", "p.yaml").joint),
+            std::size_t{1} << 19);
+  const auto error = [](const std::string& value) {
+    return error_of([&] { parse_params("joint:\n  block_memory_mb: " + value + "\n", "e.yaml"); });
+  };
+  for (const char* bad : {"-1", "2e9"})
+    EXPECT_NE(error(bad).find("e.yaml:2: key 'joint.block_memory_mb': must be in [0, 1e9]"),
+              std::string::npos)
+        << bad;
+  for (const char* bad : {".nan", ".inf"})
+    EXPECT_NE(error(bad).find("e.yaml:2: key 'joint.block_memory_mb': expected a finite number"),
+              std::string::npos)
+        << bad;
 }
 
 }  // namespace

@@ -22,9 +22,10 @@ namespace {
 struct Problem {
   Problem(std::vector<jpcr::VertexMap> vertices, const jpcr::CameraIntrinsics& camera,
           const jpcr::NeighbourhoodPattern& pattern, const jpcr::JointTermParams& terms,
-          jpcr::JointSampling sampling, jpcr::JointState start)
+          jpcr::JointSampling sampling, jpcr::JointState start,
+          std::size_t block_memory = jpcr::kDefaultBlockMemory)
       : frames(std::move(vertices)),
-        system(frames, camera, pattern, terms, sampling),
+        system(frames, camera, pattern, terms, sampling, block_memory),
         state(std::move(start)) {}
   std::vector<jpcr::VertexMap> frames;
   jpcr::JointSystem system;
@@ -56,7 +57,8 @@ void time_iterations(benchmark::State& state, Iteration&& iteration) {
 // poses are independent problems (fixed_quadric_alignment.hpp), each the reference frame and
 // one other; an iteration is one of each.
 void run(benchmark::State& state, bool estimate_quadrics,
-         jpcr::JointSampling sampling = jpcr::JointSampling::kGathered) {
+         jpcr::JointSampling sampling = jpcr::JointSampling::kGathered,
+         std::size_t block_memory = jpcr::kDefaultBlockMemory) {
   const jpcr::bench::JointBenchWindow w = jpcr::bench::make_joint_window(
       static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const jpcr::JointParams params;
@@ -64,8 +66,8 @@ void run(benchmark::State& state, bool estimate_quadrics,
   const jpcr::JointTermParams terms = params.terms(estimate_quadrics);
   std::vector<std::unique_ptr<Problem>> problems;
   if (estimate_quadrics) {
-    problems.push_back(
-        std::make_unique<Problem>(w.vertices, w.camera, pattern, terms, sampling, w.state));
+    problems.push_back(std::make_unique<Problem>(w.vertices, w.camera, pattern, terms, sampling,
+                                                 w.state, block_memory));
   } else {
     for (std::size_t j = 1; j < w.vertices.size(); ++j) {
       jpcr::JointState alone = w.state;
@@ -103,14 +105,19 @@ void BM_JointFrameToFrameIterationReference(benchmark::State& state) {
 void BM_JointWindowIteration(benchmark::State& state) {
   run(state, true);
 }
+// The same without the kept blocks (joint.block_memory_mb: 0): the step computes each quadric's
+// system again, as J-full did before it kept them.
+void BM_JointWindowIterationRecomputed(benchmark::State& state) {
+  run(state, true, jpcr::JointSampling::kGathered, 0);
+}
 void BM_FixedQuadricIteration(benchmark::State& state) {
   run(state, false);
 }
 
-// A rejected J-ftf step: solve the poses, back-substitute and cost the candidate, then only the
-// damping changes (JointSystem::redamp: the kept blocks eliminated again, no new sums), as the
-// loop does after a step the cost refuses. The damping alternates between two values.
-void BM_JointFrameToFrameRejectedStep(benchmark::State& state) {
+// A rejected J-ftf or J-full step: solve the poses, back-substitute and cost the candidate, then
+// only the damping changes (JointSystem::redamp: the kept blocks eliminated again, no new sums),
+// as the loop does after a step the cost refuses. The damping alternates between two values.
+void rejected_step(benchmark::State& state) {
   const jpcr::bench::JointBenchWindow w = jpcr::bench::make_joint_window(
       static_cast<int>(state.range(0)), static_cast<int>(state.range(1)));
   const jpcr::JointParams params;
@@ -128,6 +135,12 @@ void BM_JointFrameToFrameRejectedStep(benchmark::State& state) {
   };
   time_iterations(state, rejected_step);
   state.counters["active_quadrics"] = p.lin.active;
+}
+void BM_JointFrameToFrameRejectedStep(benchmark::State& state) {
+  rejected_step(state);
+}
+void BM_JointWindowRejectedStep(benchmark::State& state) {
+  rejected_step(state);
 }
 
 // keep_lower_cost_fits (joint.keep_lower_cost_fit), the pass after the loop: the refined map is
@@ -194,6 +207,16 @@ BENCHMARK(BM_JointWindowIteration)
     ->Args({640, 5})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+BENCHMARK(BM_JointWindowIterationRecomputed)
+    ->Args({320, 5})
+    ->Args({640, 5})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
+BENCHMARK(BM_JointWindowRejectedStep)
+    ->Args({320, 5})
+    ->Args({640, 5})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 BENCHMARK(BM_FixedQuadricIteration)
     ->Args({320, 5})
     ->Args({640, 5})
@@ -210,11 +233,15 @@ int main(int argc, char** argv) {
       "the candidate. room_spheres with 1 % range noise at 320x240 and 640x480, poses 1 cm / 1°\n"
       "off the truth; J-ftf also with the per-sample reference sums the GPU kernels run; and\n"
       "the pass after the loop that keeps each quadric's lower-cost fit (keep_lower_cost_fit);\n"
-      "and a rejected J-ftf step (propose, then only the damping changes: redamp).\n"
+      "a rejected J-ftf and J-full step (propose, then only the damping changes: redamp); and\n"
+      "the J-full iteration without kept blocks (joint.block_memory_mb: 0).\n"
       "Then the ratios of the same run: gathered / reference sums (J-ftf), Q-full / J-full,\n"
-      "that pass / one iteration (J-ftf at M = 2, J-full at M = 5), rejected / accepted step.",
+      "that pass / one iteration (J-ftf at M = 2, J-full at M = 5), rejected / accepted step,\n"
+      "J-full with / without kept blocks.",
       {{"BM_JointFrameToFrameIteration", "BM_JointFrameToFrameIterationReference"},
        {"BM_JointFrameToFrameRejectedStep", "BM_JointFrameToFrameIteration"},
+       {"BM_JointWindowRejectedStep", "BM_JointWindowIteration"},
+       {"BM_JointWindowIteration", "BM_JointWindowIterationRecomputed"},
        {"BM_FixedQuadricIteration", "BM_JointWindowIteration"},
        {"BM_KeepLowerCostFits", "BM_JointFrameToFrameIteration"},
        {"BM_KeepLowerCostFits", "BM_JointWindowIteration"}});
